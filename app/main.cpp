@@ -1,0 +1,102 @@
+// The `drape` executable: command-line front end.
+//   drape run ...   headless run of a scene with machine-readable figures (see run_command.hpp)
+// Exit codes: 0 ok, 2 bad input (one line naming the flag and its allowed range), 3 simulation became non-finite.
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "drape/errors.hpp"
+#include "drape/scene_hang.hpp"
+#include "run_command.hpp"
+
+namespace {
+
+/// A CLI11 validator whose message states the allowed range (and unit) in one line.
+template <class T> CLI::Validator in_range(T lo, T hi, const std::string& unit = "") {
+    std::ostringstream desc;
+    desc << "[" << lo << ", " << hi << "]" << unit;
+    const std::string range = desc.str();
+    return CLI::Validator(
+        [lo, hi, range](std::string& text) -> std::string {
+            T value{};
+            std::istringstream in(text);
+            in >> value;
+            if (in.fail() || !in.eof()) return "'" + text + "' is not a number; allowed range " + range;
+            if (!(value >= lo && value <= hi)) return "value " + text + " is outside the allowed range " + range;
+            return {};
+        },
+        range);
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{"drape: a data-oriented, SIMD + multithreaded mass-spring cloth engine"};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", "drape 0.1.0");
+
+    drape::app::RunOptions run;
+    CLI::App* cmd = app.add_subcommand("run", "Headless run of a scene; prints its figures (use --json for one "
+                                              "machine-readable object).");
+    cmd->add_option("--scene", run.scene, "Scene to run")->check(CLI::IsMember({"hang"}))->capture_default_str();
+    cmd->add_option("--size", run.size, "Particles per side N (N x N particles)")
+        ->check(in_range<std::uint32_t>(drape::hang_min_n, drape::hang_max_n))
+        ->capture_default_str();
+    cmd->add_option("--threads", run.threads, "Worker threads (default: all hardware threads)")
+        ->check(in_range<int>(1, 256));
+    auto* steps = cmd->add_option("--steps", run.steps, "Substeps (integration steps of size dt) to run [default 1000]")
+                      ->check(in_range<std::uint64_t>(1, 1'000'000'000));
+    auto* secs = cmd->add_option("--sim-seconds", run.sim_seconds, "Simulated seconds to run (instead of --steps)")
+                     ->check(in_range<double>(1e-6, 1e4, " s"));
+    steps->excludes(secs);
+    cmd->add_option("--dt", run.dt, "Substep in seconds (default: 0.9 x the explicit stability bound)")
+        ->check(in_range<double>(1e-9, 0.1, " s"));
+    cmd->add_option("--integrator", run.integrator, "Time integrator")
+        ->check(CLI::IsMember({"euler", "verlet"}))
+        ->capture_default_str();
+    cmd->add_option("--stiffness", run.stiffness, "Structural spring stiffness k in N/m (shear 0.5 k, bend 0.1 k)")
+        ->check(in_range<float>(100.0f, 25000.0f, " N/m"))
+        ->capture_default_str();
+    cmd->add_option("--damping", run.damping, "Spring damping as a fraction of critical damping")
+        ->check(in_range<float>(0.0f, 1.0f))
+        ->capture_default_str();
+    cmd->add_option("--drag", run.drag, "Air drag kr in 1/s (F = -m kr v)")
+        ->check(in_range<float>(0.0f, 100.0f, " 1/s"))
+        ->capture_default_str();
+    cmd->add_flag("--wind", run.wind, "Enable seed 000's analytic wind field");
+    cmd->add_option("--wind-strength", run.wind_strength, "Wind amplitude in m/s^2")
+        ->check(in_range<float>(0.0f, 100.0f, " m/s^2"))
+        ->capture_default_str();
+    cmd->add_option("--kernel", run.kernel, "Spring kernel: grid stencil, general CSR, or auto")
+        ->check(CLI::IsMember({"auto", "grid", "csr"}))
+        ->capture_default_str();
+    cmd->add_flag("--staged", run.staged, "Run each stage as its own pass instead of the fused pass");
+    cmd->add_flag("--json", run.json, "Print exactly one JSON object on stdout");
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        std::fprintf(stderr, "drape: %s (see drape %s--help)\n", e.what(), cmd->parsed() ? "run " : "");
+        return 2;
+    }
+
+    try {
+        if (cmd->parsed()) return drape::app::run_command(run);
+    } catch (const drape::InvalidInput& e) {
+        std::fprintf(stderr, "drape: %s\n", e.what());
+        return 2;
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "drape: out of memory building the scene; choose a smaller --size\n");
+        return 2;
+    }
+    return 0;
+}

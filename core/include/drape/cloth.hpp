@@ -1,0 +1,81 @@
+// The cooked cloth: immutable topology and material data, built once from an edge list ("cook once, never
+// allocate in a step"). Three tiers of data in drape:
+//   cold   - what the user authored (scene parameters, grid size, masks): see scene_hang.hpp;
+//   cooked - this file: particle count and padding, inverse masses, springs (edge list, CSR, SIMD-sliced CSR,
+//            optional regular-grid stencil), triangles for drawing;
+//   hot    - per-step state (positions, velocities / previous positions): see simulation.hpp.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "drape/aligned_array.hpp"
+#include "drape/simd.hpp"
+#include "drape/spring_graph.hpp"
+
+namespace drape {
+
+/// Particles per parallel block. A multiple of the SIMD width, fixed, so block boundaries never depend on the
+/// thread count (determinism) and a block's state (1024 x 6 floats x 2 buffers = 48 KiB) stays in L2.
+inline constexpr std::size_t block_particles = 1024;
+static_assert(block_particles % simd::width == 0);
+
+/// Spring material per kind: Hooke stiffness and damping along the spring.
+struct SpringMaterial {
+    float stiffness = 0.0f; ///< k, N/m
+    float damping = 0.0f;   ///< kd, N*s/m: F = kd ((v_j - v_i) . d) d, d the unit spring direction
+};
+
+/// Regular-grid fast path: every particle's neighbours sit at fixed index offsets, so the kernel uses unaligned
+/// contiguous loads instead of gathers. Slot order is ascending offset, the same order as a sorted CSR row, so the
+/// grid kernel sums the same terms in the same order as the general kernel.
+struct GridStencil {
+    static constexpr std::size_t slot_count = 12;
+    std::uint32_t columns = 0; ///< particles per grid row (index = row * columns + column)
+    std::uint32_t rows = 0;
+    std::array<std::int32_t, slot_count> offset{};  ///< neighbour index - own index
+    std::array<SpringKind, slot_count> kind{};      ///< material of the spring in this slot
+    std::array<float, slot_count> rest{};           ///< rest length, m
+    AlignedArray<std::uint32_t> mask;               ///< per particle: bit s set when slot s's spring exists
+};
+
+/// Everything about a cloth that does not change while it is simulated.
+struct Cloth {
+    std::size_t particle_count = 0; ///< real particles
+    std::size_t padded_count = 0;   ///< particle_count rounded up to whole SIMD batches
+    std::size_t halo = 0;           ///< zeroed elements on each side of every hot array (grid-kernel reads)
+    AlignedArray<float> inv_mass;   ///< 1/kg; 0 = pinned (and for padding)
+    std::array<SpringMaterial, spring_kind_count> material{};
+    std::vector<Edge> edges;         ///< every spring once (cold list; health and colouring read it)
+    SpringGraph graph;               ///< CSR and SIMD-sliced CSR over the edges
+    std::optional<GridStencil> grid; ///< present when the cloth is a full or masked regular grid
+    std::vector<std::uint32_t> triangles; ///< 3 indices per triangle, counter-clockwise seen from +normal
+
+    std::size_t block_count() const noexcept { return (padded_count + block_particles - 1) / block_particles; }
+    std::size_t spring_count() const noexcept { return edges.size(); }
+};
+
+/// Initial per-particle state (cold, plain vectors of particle_count entries).
+struct InitialState {
+    std::vector<float> x, y, z;    ///< positions, m
+    std::vector<float> vx, vy, vz; ///< velocities, m/s
+};
+
+/// Rounds n up to whole SIMD batches.
+constexpr std::size_t pad_to_width(std::size_t n) noexcept {
+    return (n + simd::width - 1) / simd::width * simd::width;
+}
+
+/// Cooks a cloth from inverse masses (1/kg, 0 = pinned) and an edge list: sorts and checks the
+/// edges, builds CSR and the SIMD-sliced CSR, fills the per-entry material. Throws InvalidInput on a bad edge
+/// (index out of range, self loop, duplicate, non-positive rest length) or a bad material.
+Cloth cook_cloth(std::span<const float> inv_mass, std::vector<Edge> edges,
+                 const std::array<SpringMaterial, spring_kind_count>& material, std::size_t halo = 0);
+
+/// Re-fills every per-entry stiffness and damping from `material` (after the user changes a material).
+void apply_materials(Cloth& cloth, const std::array<SpringMaterial, spring_kind_count>& material);
+
+} // namespace drape

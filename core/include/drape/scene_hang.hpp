@@ -1,0 +1,40 @@
+// Scene "hang" (BENCH.md): a square cloth of N x N particles, flat and horizontal in the x-z plane at y = 0,
+// structural, shear and bend springs, corners (0,0) and (N-1,0) pinned. Scene builders live once in core and
+// serve the app, the tests and the benchmarks.
+#pragma once
+
+#include <cstdint>
+
+#include "drape/cloth.hpp"
+
+namespace drape {
+
+/// What the user chooses for "hang" (cold tier). Ranges are checked by build_hang_scene.
+struct HangParams {
+    std::uint32_t n = 100;     ///< particles per side, 2..4096
+    float size = 1.0f;         ///< side length, m
+    float total_mass = 0.1f;   ///< kg, spread evenly
+    float stiffness = 1000.0f; ///< structural k, N/m (100..25000, seed 000)
+    float shear_ratio = 0.5f;  ///< shear k = ratio * structural k
+    float bend_ratio = 0.1f;   ///< bend k = ratio * structural k
+    /// Spring damping as a fraction of critical damping of one spring between two particles (0..1):
+    /// kd = ratio * 2 sqrt(k m / 2). Keeps the damping meaningful at any resolution.
+    float damping_ratio = 0.05f;
+    bool pin_corners = true;
+};
+
+inline constexpr std::uint32_t hang_min_n = 2;
+inline constexpr std::uint32_t hang_max_n = 4096;
+
+struct SceneBuild {
+    Cloth cloth;
+    InitialState initial;
+};
+
+/// Builds the hang scene: cooked cloth with the grid stencil, and its initial state. Throws InvalidInput.
+SceneBuild build_hang_scene(const HangParams& params);
+
+/// Particle index of grid cell (column i, row j).
+constexpr std::uint32_t grid_index(std::uint32_t n, std::uint32_t i, std::uint32_t j) noexcept { return j * n + i; }
+
+} // namespace drape

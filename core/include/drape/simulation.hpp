@@ -1,0 +1,141 @@
+// The simulation: hot state plus the substep pipeline over it.
+//
+// One substep (DESIGN.md), each stage a function over spans of the SoA arrays, in core/src/<stage>.cpp:
+//   1. external_forces  gravity, air drag, analytic wind field
+//   2. spring_forces    Hooke springs and spring damping, CSR gather (or the regular-grid stencil)
+//   3. integrate        symplectic Euler or position Verlet; pins (inverse mass 0) never move
+// Stages 1-3 are fused into one pass over memory (core/src/substep.cpp); the staged form runs each stage as its own
+// pass and serves as the reference and for per-stage benchmarks. State is double-buffered: a substep reads buffer
+// A and writes buffer B, so every particle sees its neighbours' state of the same instant whatever the order of
+// blocks and threads - results are bitwise identical for any thread count.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "drape/cloth.hpp"
+#include "drape/errors.hpp"
+
+namespace drape {
+
+namespace kernels {
+struct StepContext;
+}
+
+enum class Integrator : std::uint8_t {
+    symplectic_euler, ///< v' = v + a dt, x' = x + v' dt (001 eqs 9-10)
+    verlet,           ///< x' = 2x - x_prev + a dt^2 (000 eq 1.12, without the listing's spurious 1/2)
+};
+const char* integrator_name(Integrator integrator) noexcept;
+
+/// Which spring kernel runs: the regular-grid stencil (contiguous loads) or the general sliced CSR (gathers).
+enum class KernelPath : std::uint8_t { automatic, grid, csr };
+const char* kernel_path_name(KernelPath path) noexcept;
+
+/// Seed 000's analytic wind (listing 3.3) as an acceleration field, m/s^2:
+///   a = strength * (sin(10 t), 0, |sin(z + 10 t)|).
+/// The seed's y component is illegible in the source; drape uses 0 (horizontal wind).
+struct WindField {
+    bool enabled = false;
+    float strength = 2.0f; ///< m/s^2, 0..100
+};
+
+struct SimulationParams {
+    float dt = 0.0f; ///< s, one substep; must be below the explicit stability bound (stability.hpp)
+    Integrator integrator = Integrator::symplectic_euler;
+    std::array<float, 3> gravity{0.0f, -9.81f, 0.0f}; ///< m/s^2
+    float air_drag = 0.2f;                            ///< 1/s: F = -m kr v (001 eq 4), 0..100
+    WindField wind;
+    KernelPath kernel = KernelPath::automatic;
+    bool fused = true; ///< false runs each stage as its own pass (reference / per-stage profiling)
+};
+
+/// Hot state: one buffer of the double-buffered SoA arrays. u, v, w hold velocities (symplectic Euler) or the
+/// previous positions (Verlet).
+struct StateBuffer {
+    AlignedArray<float> x, y, z, u, v, w;
+};
+
+/// Health figures computed on request (not per substep).
+struct Health {
+    float max_structural_strain = 0.0f; ///< max |l - l0| / l0 over structural springs
+    double kinetic_energy = 0.0;        ///< J
+    bool finite = true;
+};
+
+/// Per-stage names in step order; the same strings label bench counters and profiler zones.
+enum class Stage : std::uint8_t { external_forces, spring_forces, integrate, count };
+const char* stage_name(Stage stage) noexcept;
+
+class Simulation {
+  public:
+    /// Validates every parameter and the time step against the stability bound; throws InvalidInput naming the
+    /// parameter and the allowed range. Allocates all state and scratch here, never in step().
+    Simulation(Cloth cloth, const InitialState& initial, const SimulationParams& params);
+
+    /// Advances `count` substeps of params().dt. Parallel over fixed particle blocks with oneTBB (the thread count is
+    /// the caller's: tbb::global_control). Throws SimulationError naming the step and the particle if any value
+    /// becomes non-finite; the state is then left at the last finite step.
+    void step(std::size_t count = 1);
+
+    /// Same as step() but runs every stage serially on the calling thread (the "serial twin" of the parallel path).
+    void step_serial(std::size_t count = 1);
+
+    const Cloth& cloth() const noexcept { return cloth_; }
+    const SimulationParams& params() const noexcept { return params_; }
+    KernelPath kernel() const noexcept { return kernel_; }
+    std::size_t steps_done() const noexcept { return steps_done_; }
+    double time() const noexcept { return static_cast<double>(steps_done_) * params_.dt; }
+
+    /// Current positions (particle_count entries each).
+    std::span<const float> x() const noexcept { return {cur().x.data(), cloth_.particle_count}; }
+    std::span<const float> y() const noexcept { return {cur().y.data(), cloth_.particle_count}; }
+    std::span<const float> z() const noexcept { return {cur().z.data(), cloth_.particle_count}; }
+    /// Velocity of particle i, m/s (for Verlet: (x - x_prev) / dt).
+    std::array<float, 3> velocity(std::size_t i) const noexcept;
+    /// Names of the stages a substep runs, e.g. {"external_forces", "spring_forces", "integrate"}.
+    std::vector<std::string> stage_names() const;
+
+    Health health() const;
+    /// 64-bit FNV-1a hash of the position bits (x, y, z of particle 0, then particle 1, ...).
+    std::uint64_t checksum() const noexcept;
+
+    /// Changes one spring kind's material; throws InvalidInput if it would make params().dt unstable.
+    void set_material(SpringKind kind, SpringMaterial material);
+    /// Sets the time step and other run parameters; throws InvalidInput when out of range or unstable.
+    void set_params(const SimulationParams& params);
+
+    /// Direct access for tests and benchmarks (current buffer and the cooked data).
+    const StateBuffer& state() const noexcept { return cur(); }
+
+    /// Runs one named stage alone over every block (per-stage benchmarks). The stages read/write scratch arrays;
+    /// the state is not advanced.
+    void run_stage(Stage stage);
+
+  private:
+    template <bool Parallel> void step_impl(std::size_t count);
+    kernels::StepContext make_context(std::size_t step_index);
+    KernelPath resolve_params(const SimulationParams& params) const;
+    void check_blocks(std::size_t step_index);
+    StateBuffer& cur() noexcept { return buffers_[current_]; }
+    const StateBuffer& cur() const noexcept { return buffers_[current_]; }
+
+    Cloth cloth_;
+    SimulationParams params_;
+    KernelPath kernel_ = KernelPath::csr;
+    std::array<StateBuffer, 2> buffers_;
+    int current_ = 0;
+    std::size_t steps_done_ = 0;
+    // Scratch for the staged pipeline: spring force (N) and external acceleration (m/s^2), sized at construction.
+    AlignedArray<float> fx_, fy_, fz_, ax_, ay_, az_;
+    std::vector<std::uint8_t> block_ok_; ///< per block: 1 when every value the block wrote is finite
+};
+
+/// Validates run parameters (ranges, not stability); throws InvalidInput.
+void validate_params(const SimulationParams& params);
+
+} // namespace drape

@@ -1,0 +1,76 @@
+// Cooking a cloth: validated edges, CSR/SELL, per-entry materials.
+#include "drape/cloth.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "drape/errors.hpp"
+
+namespace drape {
+
+namespace {
+
+void check_material(SpringKind kind, const SpringMaterial& m) {
+    if (!(m.stiffness >= 0.0f && m.stiffness <= 1e6f))
+        throw InvalidInput(std::string("material.") + spring_kind_name(kind) + ".stiffness = " +
+                           std::to_string(m.stiffness) + " N/m is outside the allowed range [0, 1e6]");
+    if (!(m.damping >= 0.0f && m.damping <= 1e3f))
+        throw InvalidInput(std::string("material.") + spring_kind_name(kind) + ".damping = " +
+                           std::to_string(m.damping) + " N*s/m is outside the allowed range [0, 1e3]");
+}
+
+} // namespace
+
+Cloth cook_cloth(std::span<const float> inv_mass, std::vector<Edge> edges,
+                 const std::array<SpringMaterial, spring_kind_count>& material, std::size_t halo) {
+    const std::size_t n = inv_mass.size();
+    if (n == 0) throw InvalidInput("cloth has no particles (need at least 1)");
+    if (n >= (std::size_t{1} << 31)) throw InvalidInput("cloth has " + std::to_string(n) + " particles (max 2^31-1)");
+    for (std::size_t i = 0; i < n; ++i)
+        if (!(inv_mass[i] >= 0.0f) || !std::isfinite(inv_mass[i]))
+            throw InvalidInput("particle " + std::to_string(i) + " has inverse mass " + std::to_string(inv_mass[i]) +
+                               " (must be finite and >= 0; 0 pins it)");
+    for (Edge& e : edges) {
+        if (e.a >= n || e.b >= n)
+            throw InvalidInput("spring " + std::to_string(e.a) + "-" + std::to_string(e.b) +
+                               " names a particle outside [0, " + std::to_string(n - 1) + "]");
+        if (e.a == e.b) throw InvalidInput("spring joins particle " + std::to_string(e.a) + " to itself");
+        if (!(e.rest > 0.0f) || !std::isfinite(e.rest))
+            throw InvalidInput("spring " + std::to_string(e.a) + "-" + std::to_string(e.b) + " has rest length " +
+                               std::to_string(e.rest) + " m (must be > 0 and finite)");
+        if (e.a > e.b) std::swap(e.a, e.b);
+    }
+    std::sort(edges.begin(), edges.end(), [](const Edge& l, const Edge& r) {
+        return l.a != r.a ? l.a < r.a : l.b < r.b;
+    });
+    for (std::size_t k = 1; k < edges.size(); ++k)
+        if (edges[k].a == edges[k - 1].a && edges[k].b == edges[k - 1].b)
+            throw InvalidInput("duplicate spring " + std::to_string(edges[k].a) + "-" + std::to_string(edges[k].b));
+
+    Cloth c;
+    c.particle_count = n;
+    c.padded_count = pad_to_width(n);
+    c.halo = halo;
+    c.inv_mass.reset(c.padded_count, halo);
+    std::copy(inv_mass.begin(), inv_mass.end(), c.inv_mass.data());
+    c.edges = std::move(edges);
+    c.graph = build_spring_graph(n, c.padded_count, c.edges);
+    apply_materials(c, material);
+    return c;
+}
+
+void apply_materials(Cloth& cloth, const std::array<SpringMaterial, spring_kind_count>& material) {
+    for (std::size_t k = 0; k < spring_kind_count; ++k) check_material(static_cast<SpringKind>(k), material[k]);
+    cloth.material = material;
+    SpringGraph& g = cloth.graph;
+    for (std::size_t at = 0; at < g.sell_entry_count(); ++at) {
+        const std::uint32_t e = g.sell_edge[at];
+        if (e == std::numeric_limits<std::uint32_t>::max()) continue;
+        const SpringMaterial& m = material[static_cast<std::size_t>(cloth.edges[e].kind)];
+        g.sell_stiffness[at] = m.stiffness;
+        g.sell_damping[at] = m.damping;
+    }
+}
+
+} // namespace drape

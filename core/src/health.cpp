@@ -1,0 +1,50 @@
+// Health figures on request: max structural strain, kinetic energy, finite flag. Block partials are combined in
+// block order so the figures, like the state, do not depend on the thread count.
+#include <cmath>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "drape/simulation.hpp"
+
+namespace drape {
+
+Health Simulation::health() const {
+    const StateBuffer& s = cur();
+    const std::size_t n = cloth_.particle_count;
+    const std::size_t blocks = cloth_.block_count();
+    std::vector<double> energy(blocks, 0.0);
+    std::vector<std::uint8_t> finite(blocks, 1);
+    tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+        const std::size_t begin = b * block_particles, end = std::min(begin + block_particles, n);
+        double e = 0.0;
+        bool ok = true;
+        for (std::size_t i = begin; i < end; ++i) {
+            ok = ok && std::isfinite(s.x[i]) && std::isfinite(s.y[i]) && std::isfinite(s.z[i]) &&
+                 std::isfinite(s.u[i]) && std::isfinite(s.v[i]) && std::isfinite(s.w[i]);
+            const float inv_m = cloth_.inv_mass[i];
+            if (inv_m == 0.0f) continue;
+            const std::array<float, 3> v = velocity(i);
+            e += 0.5 / inv_m * (double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
+        }
+        energy[b] = e;
+        finite[b] = ok ? 1 : 0;
+    });
+    Health h;
+    for (std::size_t b = 0; b < blocks; ++b) {
+        h.kinetic_energy += energy[b];
+        h.finite = h.finite && finite[b];
+    }
+    float max_strain = 0.0f;
+    for (const Edge& e : cloth_.edges) {
+        if (e.kind != SpringKind::structural) continue;
+        const float dx = s.x[e.b] - s.x[e.a], dy = s.y[e.b] - s.y[e.a], dz = s.z[e.b] - s.z[e.a];
+        const float strain = std::fabs(std::sqrt(dx * dx + dy * dy + dz * dz) - e.rest) / e.rest;
+        if (!(strain <= max_strain)) max_strain = strain; // NaN propagates as the maximum
+    }
+    h.max_structural_strain = max_strain;
+    return h;
+}
+
+} // namespace drape

@@ -1,0 +1,85 @@
+// The small parameter struct every kernel takes: raw pointers into the SoA arrays plus per-substep constants.
+// Built once per substep by Simulation (substep.cpp); kernels never touch Simulation or Cloth directly.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include "drape/cloth.hpp"
+#include "drape/simd.hpp"
+
+#define DRAPE_INLINE [[gnu::always_inline]] inline
+
+namespace drape::kernels {
+
+using simd::fbatch;
+using simd::fmask;
+
+struct Vec3b {
+    fbatch x, y, z;
+};
+
+/// One particle batch's own state, loaded once and shared by every stage of the fused pass.
+struct SelfBatch {
+    fbatch x, y, z; ///< position, m
+    fbatch u, v, w; ///< velocity (symplectic Euler) or previous position (Verlet)
+};
+
+struct StepContext {
+    // State read this substep (buffer A) and written (buffer B). Hot arrays carry a halo (see aligned_array.hpp).
+    const float* __restrict x;
+    const float* __restrict y;
+    const float* __restrict z;
+    const float* __restrict u;
+    const float* __restrict v;
+    const float* __restrict w;
+    float* __restrict out_x;
+    float* __restrict out_y;
+    float* __restrict out_z;
+    float* __restrict out_u;
+    float* __restrict out_v;
+    float* __restrict out_w;
+    const float* __restrict inv_mass;
+
+    // Regular-grid stencil (grid path).
+    const std::uint32_t* __restrict grid_mask;
+    std::array<std::ptrdiff_t, GridStencil::slot_count> grid_offset;
+    std::array<float, GridStencil::slot_count> grid_k;     ///< N/m
+    std::array<float, GridStencil::slot_count> grid_krest; ///< k * l0, N
+    std::array<float, GridStencil::slot_count> grid_kd;    ///< N*s/m; for Verlet already divided by dt
+
+    // SIMD-sliced CSR (general path).
+    const std::uint32_t* __restrict slice_begin;
+    const std::uint32_t* __restrict slice_slots;
+    const std::uint32_t* __restrict sell_neighbour;
+    const float* __restrict sell_rest;
+    const float* __restrict sell_stiffness;
+    const float* __restrict sell_damping;
+
+    // Per-substep constants.
+    float dt;      ///< s
+    float dt2;     ///< s^2
+    float inv_dt;  ///< 1/s
+    float gx, gy, gz; ///< gravity, m/s^2
+    float drag;    ///< 1/s
+    float wind_x;  ///< strength * sin(10 t), m/s^2 (uniform in space)
+    float wind_strength; ///< m/s^2
+    float wind_phase;    ///< 10 t, rad
+
+    // Staged-pipeline scratch: spring force (N) and external acceleration (m/s^2).
+    float* __restrict fx;
+    float* __restrict fy;
+    float* __restrict fz;
+    float* __restrict ax;
+    float* __restrict ay;
+    float* __restrict az;
+    std::uint8_t* block_ok; ///< per block: 1 when every value written is finite
+};
+
+DRAPE_INLINE SelfBatch load_self(const StepContext& c, std::size_t p) noexcept {
+    return {simd::load(c.x + p), simd::load(c.y + p), simd::load(c.z + p),
+            simd::load(c.u + p), simd::load(c.v + p), simd::load(c.w + p)};
+}
+
+} // namespace drape::kernels

@@ -1,0 +1,116 @@
+// Scene "hang" (BENCH.md).
+#include "drape/scene_hang.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "drape/errors.hpp"
+
+namespace drape {
+
+namespace {
+
+template <class T> void check_range(const char* name, T value, T lo, T hi, const char* unit) {
+    if (!(value >= lo && value <= hi))
+        throw InvalidInput(std::string(name) + " = " + std::to_string(value) + unit + " is outside the allowed range [" +
+                           std::to_string(lo) + ", " + std::to_string(hi) + "]");
+}
+
+} // namespace
+
+SceneBuild build_hang_scene(const HangParams& p) {
+    check_range("size (particles per side)", p.n, hang_min_n, hang_max_n, "");
+    check_range("cloth size", p.size, 0.01f, 100.0f, " m");
+    check_range("total mass", p.total_mass, 1e-6f, 1e3f, " kg");
+    check_range("stiffness", p.stiffness, 100.0f, 25000.0f, " N/m");
+    check_range("shear ratio", p.shear_ratio, 0.0f, 1.0f, "");
+    check_range("bend ratio", p.bend_ratio, 0.0f, 1.0f, "");
+    check_range("damping ratio", p.damping_ratio, 0.0f, 1.0f, "");
+
+    const std::uint32_t n = p.n;
+    const std::size_t count = std::size_t{n} * n;
+    const float h = p.size / static_cast<float>(n - 1);
+    const float mass = p.total_mass / static_cast<float>(count);
+
+    // Particles: row j along z, column i along x, flat at y = 0, centred on the origin.
+    SceneBuild out;
+    InitialState& s = out.initial;
+    s.x.resize(count);
+    s.y.assign(count, 0.0f);
+    s.z.resize(count);
+    s.vx.assign(count, 0.0f);
+    s.vy.assign(count, 0.0f);
+    s.vz.assign(count, 0.0f);
+    std::vector<float> inv_mass(count, 1.0f / mass);
+    for (std::uint32_t j = 0; j < n; ++j)
+        for (std::uint32_t i = 0; i < n; ++i) {
+            const std::uint32_t k = grid_index(n, i, j);
+            s.x[k] = -0.5f * p.size + static_cast<float>(i) * h;
+            s.z[k] = -0.5f * p.size + static_cast<float>(j) * h;
+        }
+    if (p.pin_corners) {
+        inv_mass[grid_index(n, 0, 0)] = 0.0f;
+        inv_mass[grid_index(n, n - 1, 0)] = 0.0f;
+    }
+
+    // The stencil: 12 slots in ascending index offset (the order of a sorted CSR row).
+    GridStencil g;
+    g.columns = n;
+    g.rows = n;
+    struct Slot {
+        int di, dj;
+        SpringKind kind;
+    };
+    const int N = static_cast<int>(n);
+    const Slot slots[GridStencil::slot_count] = {
+        {0, -2, SpringKind::bend},        {-1, -1, SpringKind::shear},     {0, -1, SpringKind::structural},
+        {1, -1, SpringKind::shear},       {-2, 0, SpringKind::bend},       {-1, 0, SpringKind::structural},
+        {1, 0, SpringKind::structural},   {2, 0, SpringKind::bend},        {-1, 1, SpringKind::shear},
+        {0, 1, SpringKind::structural},   {1, 1, SpringKind::shear},       {0, 2, SpringKind::bend},
+    };
+    for (std::size_t s2 = 0; s2 < GridStencil::slot_count; ++s2) {
+        g.offset[s2] = slots[s2].dj * N + slots[s2].di;
+        g.kind[s2] = slots[s2].kind;
+        g.rest[s2] = h * std::sqrt(static_cast<float>(slots[s2].di * slots[s2].di + slots[s2].dj * slots[s2].dj));
+    }
+    // Edges, each once (from the lower index: the forward slots), with the same rest lengths as the stencil.
+    std::vector<Edge> edges;
+    edges.reserve(static_cast<std::size_t>(6) * count);
+    g.mask.reset(pad_to_width(count));
+    for (std::uint32_t j = 0; j < n; ++j)
+        for (std::uint32_t i = 0; i < n; ++i) {
+            const std::uint32_t k = grid_index(n, i, j);
+            std::uint32_t bits = 0;
+            for (std::size_t s2 = 0; s2 < GridStencil::slot_count; ++s2) {
+                const int ni = static_cast<int>(i) + slots[s2].di, nj = static_cast<int>(j) + slots[s2].dj;
+                if (ni < 0 || nj < 0 || ni >= N || nj >= N) continue;
+                bits |= 1u << s2;
+                if (g.offset[s2] > 0)
+                    edges.push_back({k, static_cast<std::uint32_t>(static_cast<int>(k) + g.offset[s2]), slots[s2].kind,
+                                     g.rest[s2]});
+            }
+            g.mask[k] = bits;
+        }
+
+    std::array<SpringMaterial, spring_kind_count> material{};
+    const float ks[3] = {p.stiffness, p.stiffness * p.shear_ratio, p.stiffness * p.bend_ratio};
+    for (int kind = 0; kind < 3; ++kind)
+        material[kind] = {ks[kind], p.damping_ratio * 2.0f * std::sqrt(ks[kind] * mass * 0.5f)};
+
+    // Halo: the stencil reaches two rows (2N) away; one extra batch keeps unaligned loads in bounds.
+    const std::size_t halo = 2 * std::size_t{n} + 2 + simd::width;
+    out.cloth = cook_cloth(inv_mass, std::move(edges), material, halo);
+    out.cloth.grid = std::move(g);
+    // Triangles: two per grid cell, counter-clockwise seen from +y.
+    auto& tri = out.cloth.triangles;
+    tri.reserve(static_cast<std::size_t>(6) * (n - 1) * (n - 1));
+    for (std::uint32_t j = 0; j + 1 < n; ++j)
+        for (std::uint32_t i = 0; i + 1 < n; ++i) {
+            const std::uint32_t a = grid_index(n, i, j), b = grid_index(n, i + 1, j), c = grid_index(n, i, j + 1),
+                                d = grid_index(n, i + 1, j + 1);
+            tri.insert(tri.end(), {a, c, b, b, c, d});
+        }
+    return out;
+}
+
+} // namespace drape

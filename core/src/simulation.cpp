@@ -1,0 +1,171 @@
+// Simulation set-up, parameters and state queries. The per-substep pipeline is in substep.cpp.
+#include "drape/simulation.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "drape/stability.hpp"
+
+namespace drape {
+
+const char* integrator_name(Integrator integrator) noexcept {
+    return integrator == Integrator::verlet ? "verlet" : "euler";
+}
+
+const char* kernel_path_name(KernelPath path) noexcept {
+    switch (path) {
+    case KernelPath::automatic: return "auto";
+    case KernelPath::grid: return "grid";
+    case KernelPath::csr: return "csr";
+    }
+    return "unknown";
+}
+
+const char* stage_name(Stage stage) noexcept {
+    switch (stage) {
+    case Stage::external_forces: return "external_forces";
+    case Stage::spring_forces: return "spring_forces";
+    case Stage::integrate: return "integrate";
+    case Stage::count: break;
+    }
+    return "unknown";
+}
+
+namespace {
+
+void check(bool ok, const std::string& name, double value, const char* range) {
+    if (!ok) throw InvalidInput(name + " = " + std::to_string(value) + " is outside the allowed range " + range);
+}
+
+} // namespace
+
+void validate_params(const SimulationParams& p) {
+    check(std::isfinite(p.dt) && p.dt > 0.0f && p.dt <= 0.1f, "dt", p.dt, "(0, 0.1] s");
+    for (int k = 0; k < 3; ++k)
+        check(std::isfinite(p.gravity[k]) && std::fabs(p.gravity[k]) <= 100.0f, "gravity[" + std::to_string(k) + "]",
+              p.gravity[k], "[-100, 100] m/s^2");
+    check(std::isfinite(p.air_drag) && p.air_drag >= 0.0f && p.air_drag <= 100.0f, "air drag", p.air_drag,
+          "[0, 100] 1/s");
+    check(std::isfinite(p.wind.strength) && p.wind.strength >= 0.0f && p.wind.strength <= 100.0f, "wind strength",
+          p.wind.strength, "[0, 100] m/s^2");
+}
+
+Simulation::Simulation(Cloth cloth, const InitialState& initial, const SimulationParams& params)
+    : cloth_(std::move(cloth)) {
+    const std::size_t n = cloth_.particle_count;
+    const std::vector<float>* fields[6] = {&initial.x, &initial.y, &initial.z, &initial.vx, &initial.vy, &initial.vz};
+    const char* names[6] = {"x", "y", "z", "vx", "vy", "vz"};
+    for (int f = 0; f < 6; ++f) {
+        if (fields[f]->size() != n)
+            throw InvalidInput(std::string("initial state field ") + names[f] + " has " +
+                               std::to_string(fields[f]->size()) + " entries, expected " + std::to_string(n));
+        for (std::size_t i = 0; i < n; ++i)
+            if (!std::isfinite((*fields[f])[i]))
+                throw InvalidInput(std::string("initial state field ") + names[f] + " of particle " +
+                                   std::to_string(i) + " is not finite");
+    }
+    kernel_ = resolve_params(params);
+    params_ = params;
+
+    const std::size_t padded = cloth_.padded_count, halo = cloth_.halo;
+    for (StateBuffer& b : buffers_)
+        for (AlignedArray<float>* a : {&b.x, &b.y, &b.z, &b.u, &b.v, &b.w}) a->reset(padded, halo);
+    for (AlignedArray<float>* a : {&fx_, &fy_, &fz_, &ax_, &ay_, &az_}) a->reset(padded);
+    block_ok_.assign(cloth_.block_count(), 1);
+
+    StateBuffer& s = buffers_[0];
+    std::memcpy(s.x.data(), initial.x.data(), n * sizeof(float));
+    std::memcpy(s.y.data(), initial.y.data(), n * sizeof(float));
+    std::memcpy(s.z.data(), initial.z.data(), n * sizeof(float));
+    for (std::size_t i = 0; i < n; ++i) {
+        const bool pinned = cloth_.inv_mass[i] == 0.0f;
+        const float vel[3] = {pinned ? 0.0f : initial.vx[i], pinned ? 0.0f : initial.vy[i],
+                              pinned ? 0.0f : initial.vz[i]};
+        if (params_.integrator == Integrator::symplectic_euler) {
+            s.u[i] = vel[0];
+            s.v[i] = vel[1];
+            s.w[i] = vel[2];
+        } else { // previous position from the initial velocity
+            s.u[i] = s.x[i] - vel[0] * params_.dt;
+            s.v[i] = s.y[i] - vel[1] * params_.dt;
+            s.w[i] = s.z[i] - vel[2] * params_.dt;
+        }
+    }
+}
+
+KernelPath Simulation::resolve_params(const SimulationParams& params) const {
+    validate_params(params);
+    KernelPath kernel = params.kernel;
+    if (kernel == KernelPath::automatic) kernel = cloth_.grid ? KernelPath::grid : KernelPath::csr;
+    if (kernel == KernelPath::grid && !cloth_.grid)
+        throw InvalidInput("kernel 'grid' needs a regular-grid cloth; this cloth has no grid stencil (use csr)");
+    check_stability(cloth_, params);
+    return kernel;
+}
+
+void Simulation::set_params(const SimulationParams& params) {
+    const KernelPath kernel = resolve_params(params);
+    // A new integrator or dt changes what u, v, w mean (velocity or previous position): convert them.
+    if (params.integrator != params_.integrator || params.dt != params_.dt) {
+        StateBuffer& s = cur();
+        for (std::size_t i = 0; i < cloth_.particle_count; ++i) {
+            const std::array<float, 3> vel = velocity(i);
+            if (params.integrator == Integrator::symplectic_euler) {
+                s.u[i] = vel[0];
+                s.v[i] = vel[1];
+                s.w[i] = vel[2];
+            } else {
+                s.u[i] = s.x[i] - vel[0] * params.dt;
+                s.v[i] = s.y[i] - vel[1] * params.dt;
+                s.w[i] = s.z[i] - vel[2] * params.dt;
+            }
+        }
+    }
+    params_ = params;
+    kernel_ = kernel;
+}
+
+void Simulation::set_material(SpringKind kind, SpringMaterial material) {
+    const std::array<SpringMaterial, spring_kind_count> previous = cloth_.material;
+    std::array<SpringMaterial, spring_kind_count> next = previous;
+    next[static_cast<std::size_t>(kind)] = material;
+    apply_materials(cloth_, next);
+    try {
+        check_stability(cloth_, params_);
+    } catch (...) {
+        apply_materials(cloth_, previous);
+        throw;
+    }
+}
+
+std::array<float, 3> Simulation::velocity(std::size_t i) const noexcept {
+    const StateBuffer& s = cur();
+    if (params_.integrator == Integrator::symplectic_euler) return {s.u[i], s.v[i], s.w[i]};
+    const float inv_dt = 1.0f / params_.dt;
+    return {(s.x[i] - s.u[i]) * inv_dt, (s.y[i] - s.v[i]) * inv_dt, (s.z[i] - s.w[i]) * inv_dt};
+}
+
+std::vector<std::string> Simulation::stage_names() const {
+    std::vector<std::string> out{"external_forces", "spring_forces", "spring_damping", "integrate", "pins"};
+    if (params_.wind.enabled) out.insert(out.begin() + 1, "wind");
+    return out;
+}
+
+std::uint64_t Simulation::checksum() const noexcept {
+    std::uint64_t h = 0xcbf29ce484222325ull; // FNV-1a 64
+    const StateBuffer& s = cur();
+    for (std::size_t i = 0; i < cloth_.particle_count; ++i) {
+        for (float f : {s.x[i], s.y[i], s.z[i]}) {
+            std::uint32_t bits;
+            std::memcpy(&bits, &f, sizeof bits);
+            for (int byte = 0; byte < 4; ++byte) {
+                h ^= (bits >> (8 * byte)) & 0xffu;
+                h *= 0x100000001b3ull;
+            }
+        }
+    }
+    return h;
+}
+
+} // namespace drape
