@@ -1,0 +1,126 @@
+// Google Benchmark over BENCH.md's "hang" scene: N x threads for the full substep, plus one benchmark per pipeline
+// stage. Counter `particle_substeps_per_second` is BENCH.md figure 1 (scene building excluded; the scene is cooked
+// once per N and reused). Run bench/sweep.py for the CSV and plots in docs/.
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include "drape/scene_hang.hpp"
+#include "drape/simulation.hpp"
+#include "drape/stability.hpp"
+
+namespace {
+
+using namespace drape;
+
+/// One simulation per (N, kernel, fused), cooked on first use and kept for the whole run.
+Simulation& simulation(std::uint32_t n, KernelPath kernel, bool fused) {
+    static std::map<std::tuple<std::uint32_t, KernelPath, bool>, std::unique_ptr<Simulation>> cache;
+    static std::mutex mutex;
+    std::lock_guard lock(mutex);
+    auto& slot = cache[{n, kernel, fused}];
+    if (!slot) {
+        HangParams hp;
+        hp.n = n;
+        SceneBuild scene = build_hang_scene(hp);
+        SimulationParams sp;
+        sp.dt = static_cast<float>(default_dt(scene.cloth, sp.air_drag));
+        sp.kernel = kernel;
+        sp.fused = fused;
+        slot = std::make_unique<Simulation>(std::move(scene.cloth), scene.initial, sp);
+    }
+    return *slot;
+}
+
+/// Substeps per benchmark iteration: ~2e6 particle-substeps, so one iteration is a few milliseconds at any N.
+std::size_t substeps_per_iteration(std::size_t particles) { return std::max<std::size_t>(1, 2'000'000 / particles); }
+
+void set_labels(benchmark::State& state, const Simulation& sim, std::size_t substeps_per_iter) {
+    const double ps = double(sim.cloth().particle_count) * double(substeps_per_iter);
+    state.counters["particle_substeps_per_second"] =
+        benchmark::Counter(ps * double(state.iterations()), benchmark::Counter::kIsRate);
+    state.counters["particles"] = double(sim.cloth().particle_count);
+    state.counters["springs"] = double(sim.cloth().spring_count());
+    std::string stages;
+    for (const std::string& s : sim.stage_names()) stages += (stages.empty() ? "" : "+") + s;
+    state.SetLabel(std::string(kernel_path_name(sim.kernel())) + (sim.params().fused ? " fused " : " staged ") + stages);
+}
+
+/// Full substep (BENCH.md figure 1). Args: N, threads.
+void run_substep(benchmark::State& state, KernelPath kernel, bool fused) {
+    const auto n = static_cast<std::uint32_t>(state.range(0));
+    const auto threads = static_cast<std::size_t>(state.range(1));
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    Simulation& sim = simulation(n, kernel, fused);
+    const std::size_t k = substeps_per_iteration(sim.cloth().particle_count);
+    sim.step(k); // warm-up: caches, thread pool
+    for (auto _ : state) sim.step(k);
+    set_labels(state, sim, k);
+    state.counters["threads"] = double(threads);
+}
+
+void BM_Substep(benchmark::State& state) { run_substep(state, KernelPath::grid, true); }
+void BM_SubstepCsr(benchmark::State& state) { run_substep(state, KernelPath::csr, true); }
+void BM_SubstepStaged(benchmark::State& state) { run_substep(state, KernelPath::grid, false); }
+
+/// One pipeline stage alone (staged form). Args: stage, N, threads.
+void BM_Stage(benchmark::State& state) {
+    const auto stage = static_cast<Stage>(state.range(0));
+    const auto n = static_cast<std::uint32_t>(state.range(1));
+    const auto threads = static_cast<std::size_t>(state.range(2));
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    Simulation& sim = simulation(n, KernelPath::grid, false);
+    sim.run_stage(stage);
+    for (auto _ : state) sim.run_stage(stage);
+    state.counters["particle_substeps_per_second"] =
+        benchmark::Counter(double(sim.cloth().particle_count) * double(state.iterations()), benchmark::Counter::kIsRate);
+    state.counters["threads"] = double(threads);
+    state.SetLabel(stage_name(stage));
+}
+
+void thread_args(benchmark::internal::Benchmark* b, std::initializer_list<std::int64_t> sizes) {
+    const int hardware = tbb::info::default_concurrency();
+    for (std::int64_t n : sizes) {
+        b->Args({n, 1});
+        for (int t = 2; t <= hardware; ++t) b->Args({n, t});
+    }
+}
+
+} // namespace
+
+BENCHMARK(BM_Substep)
+    ->ArgNames({"N", "threads"})
+    ->Apply([](auto* b) { thread_args(b, {32, 100, 316, 1000}); })
+    ->UseRealTime()
+    ->MinTime(1.0)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SubstepCsr)
+    ->ArgNames({"N", "threads"})
+    ->Apply([](auto* b) { thread_args(b, {100, 316}); })
+    ->UseRealTime()
+    ->MinTime(1.0)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SubstepStaged)
+    ->ArgNames({"N", "threads"})
+    ->Apply([](auto* b) { thread_args(b, {316}); })
+    ->UseRealTime()
+    ->MinTime(1.0)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Stage)
+    ->ArgNames({"stage", "N", "threads"})
+    ->Apply([](auto* b) {
+        const int hardware = tbb::info::default_concurrency();
+        for (int s = 0; s < static_cast<int>(Stage::count); ++s)
+            for (std::int64_t n : {316, 1000})
+                for (int t : {1, hardware}) b->Args({s, n, t});
+    })
+    ->UseRealTime()
+    ->MinTime(0.5)
+    ->Unit(benchmark::kMicrosecond);
+
+BENCHMARK_MAIN();
