@@ -73,6 +73,7 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
         for (AlignedArray<float>* a : {&b.x, &b.y, &b.z, &b.u, &b.v, &b.w}) a->reset(padded, halo);
     for (AlignedArray<float>* a : {&fx_, &fy_, &fz_, &ax_, &ay_, &az_}) a->reset(padded);
     block_ok_.assign(cloth_.block_count(), 1);
+    inv_mass_authored_.assign(cloth_.inv_mass.begin(), cloth_.inv_mass.end());
 
     StateBuffer& s = buffers_[0];
     std::memcpy(s.x.data(), initial.x.data(), n * sizeof(float));
@@ -136,6 +137,64 @@ void Simulation::set_material(SpringKind kind, SpringMaterial material) {
     } catch (...) {
         apply_materials(cloth_, previous);
         throw;
+    }
+}
+
+void Simulation::set_pinned(std::size_t i, bool pinned) {
+    if (i >= cloth_.particle_count)
+        throw InvalidInput("particle " + std::to_string(i) + " is outside [0, " +
+                           std::to_string(cloth_.particle_count - 1) + "]");
+    if (i == grabbed_) {
+        grabbed_was_pinned_ = pinned; // takes effect on release
+        return;
+    }
+    if (!pinned && inv_mass_authored_[i] == 0.0f) return; // authored pins with no mass stay pinned
+    cloth_.inv_mass[i] = pinned ? 0.0f : inv_mass_authored_[i];
+    if (pinned) {
+        StateBuffer& s = cur();
+        if (params_.integrator == Integrator::symplectic_euler) {
+            s.u[i] = s.v[i] = s.w[i] = 0.0f;
+        } else {
+            s.u[i] = s.x[i];
+            s.v[i] = s.y[i];
+            s.w[i] = s.z[i];
+        }
+    }
+}
+
+void Simulation::grab(std::size_t i, std::array<float, 3> target) {
+    if (i >= cloth_.particle_count)
+        throw InvalidInput("particle " + std::to_string(i) + " is outside [0, " +
+                           std::to_string(cloth_.particle_count - 1) + "]");
+    for (float t : target)
+        if (!std::isfinite(t)) throw InvalidInput("grab target is not finite");
+    release_grab();
+    grabbed_was_pinned_ = is_pinned(i);
+    set_pinned(i, true);
+    grabbed_ = i;
+    grab_target_ = target;
+}
+
+void Simulation::release_grab() noexcept {
+    if (grabbed_ == SIZE_MAX) return;
+    const std::size_t i = grabbed_;
+    grabbed_ = SIZE_MAX;
+    if (!grabbed_was_pinned_) cloth_.inv_mass[i] = inv_mass_authored_[i];
+}
+
+void Simulation::apply_user_constraints() noexcept {
+    if (grabbed_ == SIZE_MAX) return;
+    StateBuffer& s = cur();
+    const std::size_t i = grabbed_;
+    s.x[i] = grab_target_[0];
+    s.y[i] = grab_target_[1];
+    s.z[i] = grab_target_[2];
+    if (params_.integrator == Integrator::symplectic_euler) {
+        s.u[i] = s.v[i] = s.w[i] = 0.0f;
+    } else {
+        s.u[i] = s.x[i];
+        s.v[i] = s.y[i];
+        s.w[i] = s.z[i];
     }
 }
 

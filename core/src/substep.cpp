@@ -132,6 +132,7 @@ kernels::StepContext Simulation::make_context(std::size_t step_index) {
 template <bool Parallel> void Simulation::step_impl(std::size_t count) {
     const Integrator integ = params_.integrator;
     const bool wind = params_.wind.enabled;
+    apply_user_constraints();
     for (std::size_t n = 0; n < count; ++n) {
         const kernels::StepContext c = make_context(steps_done_);
         if (params_.fused) {

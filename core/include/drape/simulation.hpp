@@ -109,6 +109,20 @@ class Simulation {
     /// Sets the time step and other run parameters; throws InvalidInput when out of range or unstable.
     void set_params(const SimulationParams& params);
 
+    // Constraints from the user (stage 7 of DESIGN.md; applied at the start of each step() call).
+    /// Pins (inverse mass 0, velocity 0) or unpins (original mass restored) particle i. Throws InvalidInput if i is out
+    /// of range.
+    void set_pinned(std::size_t i, bool pinned);
+    bool is_pinned(std::size_t i) const noexcept { return cloth_.inv_mass[i] == 0.0f; }
+    /// Grabs particle i: it becomes kinematic and is moved to `target` (m) at the start of every step() call until
+    /// release_grab(). Grabbing another particle releases the previous one. A grabbed particle that was pinned
+    /// stays pinned when released.
+    void grab(std::size_t i, std::array<float, 3> target);
+    void move_grab(std::array<float, 3> target) noexcept { grab_target_ = target; }
+    void release_grab() noexcept;
+    /// The grabbed particle, or SIZE_MAX.
+    std::size_t grabbed() const noexcept { return grabbed_; }
+
     /// Direct access for tests and benchmarks (current buffer and the cooked data).
     const StateBuffer& state() const noexcept { return cur(); }
 
@@ -133,6 +147,11 @@ class Simulation {
     // Scratch for the staged pipeline: spring force (N) and external acceleration (m/s^2), sized at construction.
     AlignedArray<float> fx_, fy_, fz_, ax_, ay_, az_;
     std::vector<std::uint8_t> block_ok_; ///< per block: 1 when every value the block wrote is finite
+    std::vector<float> inv_mass_authored_; ///< inverse masses as cooked, for unpinning
+    std::size_t grabbed_ = SIZE_MAX;
+    bool grabbed_was_pinned_ = false;
+    std::array<float, 3> grab_target_{};
+    void apply_user_constraints() noexcept;
 };
 
 /// Validates run parameters (ranges, not stability); throws InvalidInput.
