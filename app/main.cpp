@@ -76,6 +76,17 @@ int main(int argc, char** argv) {
     cmd->add_flag("--staged", run.staged, "Run each stage as its own pass instead of the fused pass");
     cmd->add_flag("--json", run.json, "Print exactly one JSON object on stdout");
 
+    auto is_command = [&](const std::string& name) {
+        for (const CLI::App* sub : app.get_subcommands({}))
+            if (sub->check_name(name)) return true;
+        return false;
+    };
+    if (argc > 1 && argv[1][0] != '-' && !is_command(argv[1])) {
+        std::string known;
+        for (const CLI::App* sub : app.get_subcommands({})) known += (known.empty() ? "" : ", ") + sub->get_name();
+        std::fprintf(stderr, "drape: unknown command '%s' (commands: %s; see drape --help)\n", argv[1], known.c_str());
+        return 2;
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -126,6 +126,15 @@ class Simulation {
     /// Direct access for tests and benchmarks (current buffer and the cooked data).
     const StateBuffer& state() const noexcept { return cur(); }
 
+    /// Staged-pipeline scratch after run_stage(): spring force (N) and external acceleration (m/s^2) per particle.
+    struct StageOutput {
+        std::span<const float> fx, fy, fz, ax, ay, az;
+    };
+    StageOutput stage_output() const noexcept {
+        const std::size_t n = cloth_.particle_count;
+        return {{fx_.data(), n}, {fy_.data(), n}, {fz_.data(), n}, {ax_.data(), n}, {ay_.data(), n}, {az_.data(), n}};
+    }
+
     /// Runs one named stage alone over every block (per-stage benchmarks). The stages read/write scratch arrays;
     /// the state is not advanced.
     void run_stage(Stage stage);
