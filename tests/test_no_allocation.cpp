@@ -9,6 +9,9 @@
 
 #include "test_helpers.hpp"
 
+// The replacement operator new allocates with malloc, so its operator delete frees with free (g++ cannot see they pair).
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+
 namespace {
 std::atomic<bool> counting{false};
 std::atomic<std::size_t> allocations{0};

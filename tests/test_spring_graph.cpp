@@ -43,7 +43,9 @@ TEST_P(SpringGraphGrid, CsrIsSymmetricSortedAndMatchesEdges) {
     std::set<std::pair<std::uint32_t, std::uint32_t>> entries;
     for (std::uint32_t i = 0; i < c.particle_count; ++i) {
         for (std::uint32_t k = g.offsets[i]; k < g.offsets[i + 1]; ++k) {
-            if (k > g.offsets[i]) EXPECT_LT(g.neighbour[k - 1], g.neighbour[k]) << "row " << i << " not sorted";
+            if (k > g.offsets[i]) {
+                EXPECT_LT(g.neighbour[k - 1], g.neighbour[k]) << "row " << i << " not sorted";
+            }
             entries.insert({i, g.neighbour[k]});
             const Edge& e = c.edges[g.edge_index[k]];
             EXPECT_TRUE((e.a == i && e.b == g.neighbour[k]) || (e.b == i && e.a == g.neighbour[k]));
@@ -87,8 +89,11 @@ TEST_P(SpringGraphGrid, GridStencilMatchesCsrRows) {
     const GridStencil& st = *c.grid;
     // For N >= 4 the slots are in strictly ascending offset; below that two slots can share an offset, but never
     // for the same particle, and the row comparison below still holds.
-    if (GetParam() >= 4)
-        for (std::size_t s = 1; s < GridStencil::slot_count; ++s) EXPECT_LT(st.offset[s - 1], st.offset[s]);
+    if (GetParam() >= 4) {
+        for (std::size_t s = 1; s < GridStencil::slot_count; ++s) {
+            EXPECT_LT(st.offset[s - 1], st.offset[s]);
+        }
+    }
     for (std::uint32_t i = 0; i < c.particle_count; ++i) {
         std::vector<std::uint32_t> from_grid;
         for (std::size_t s = 0; s < GridStencil::slot_count; ++s)
