@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Profiles a real headless `drape run` with Linux perf and writes, under perf/out/ (git-ignored):
-#   perf.data            the raw samples (cpu-clock: this VM has no hardware counters)
+#   perf.data            the raw samples (event cpu-clock by default: works with or without hardware counters)
 #   run.txt              what the profiled run printed (throughput, strain, checksum)
+#   stat.txt             perf stat of a second, unprofiled run: cycles, instructions, IPC, L1d loads and misses (if counters work)
 #   report.txt           top symbols without and with children, the split inside the fused substep kernel
 #   annotate.txt         perf annotate of the hottest symbol (instruction level)
 #   perf.script.txt      `perf script` output (input of both viewers below)
@@ -10,9 +11,13 @@
 #   speedscope.html      offline interactive viewer (speedscope) with this profile preloaded
 # Builds the `profile` CMake preset (-O3 -g, frame pointers) in build/profile first when needed.
 #
-# Usage: perf/record.sh [--size N] [--threads T] [--steps S] [--call-graph dwarf|fp] [--freq HZ] [-- DRAPE_RUN_ARGS...]
+# Usage: perf/record.sh [--size N] [--threads T] [--steps S] [--call-graph dwarf|fp] [--freq HZ] [--event EV]
+#                       [--no-stat] [-- DRAPE_RUN_ARGS...]
 # Environment (same meaning, flags win): DRAPE_SIZE (316), DRAPE_THREADS (2), DRAPE_STEPS (3000), CALL_GRAPH (dwarf),
-# PERF_FREQ (4000), JOBS (build jobs, 1), DRAPE_PERF_OUT (output directory, perf/out).
+# PERF_FREQ (4000), PERF_EVENT (cpu-clock), PERF_STAT (1; 0 = skip the counter run), JOBS (build jobs, 1),
+# DRAPE_PERF_OUT (output directory, perf/out).
+# When the CPU's hardware counters are usable, a second run under `perf stat` adds cycles, instructions, IPC and L1d
+# figures (stat.txt, section 0 of report.txt).
 # See docs/profiling.md for how to read the results.
 set -euo pipefail
 # shellcheck source=perf/common.sh
@@ -23,9 +28,11 @@ threads="${DRAPE_THREADS:-2}"
 steps="${DRAPE_STEPS:-3000}"
 call_graph="${CALL_GRAPH:-dwarf}"
 freq="${PERF_FREQ:-4000}"
+event="${PERF_EVENT:-cpu-clock}"
+stat="${PERF_STAT:-1}"
 extra=()
 
-usage() { sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,21p' "$0" | sed 's/^# \{0,1\}//'; }
 while (($#)); do
     case "$1" in
     --size) size="${2:?--size needs a value}"; shift 2 ;;
@@ -33,6 +40,8 @@ while (($#)); do
     --steps) steps="${2:?--steps needs a value}"; shift 2 ;;
     --call-graph) call_graph="${2:?--call-graph needs dwarf or fp}"; shift 2 ;;
     --freq) freq="${2:?--freq needs a value}"; shift 2 ;;
+    --event) event="${2:?--event needs a perf event name}"; shift 2 ;;
+    --no-stat) stat=0; shift ;;
     -h | --help) usage; exit 0 ;;
     --) shift; extra=("$@"); break ;;
     *) die "unknown argument '$1' (see --help)" ;;
@@ -47,7 +56,6 @@ case "$call_graph" in dwarf | fp) ;; *) die "--call-graph must be 'dwarf' or 'fp
 # --- perf itself ------------------------------------------------------------------------------------------------------
 need_cmd perf "apt-get install linux-perf"
 perf version >/dev/null 2>&1 || die "'perf version' fails: $(perf version 2>&1 | head -n 2). Install linux-perf for this kernel."
-event="cpu-clock"
 paranoid="$(cat /proc/sys/kernel/perf_event_paranoid 2>/dev/null || echo 2)"
 if [[ "$(id -u)" != 0 ]]; then
     if ((paranoid > 2)); then
@@ -56,7 +64,7 @@ if [[ "$(id -u)" != 0 ]]; then
     elif ((paranoid == 2)); then
         say "kernel.perf_event_paranoid is 2: recording user space only (cpu-clock:u). For kernel frames too:"
         say "    sudo sysctl -w kernel.perf_event_paranoid=1"
-        event="cpu-clock:u"
+        [[ "$event" == *:* ]] || event="$event:u"
     fi
 fi
 need_cmd cmake "scripts/setup.sh (or apt-get install cmake build-essential)"
@@ -91,6 +99,21 @@ cat "$OUT/run.txt"
 grep '^\[ perf record' "$OUT/record.log" >&2 || true
 [[ -s "$OUT/perf.data" ]] || die "perf wrote no $OUT/perf.data"
 
+# --- hardware counters (a second run, not sampled) --------------------------------------------------------------------
+# Four hardware events at most: with six, this VM's PMU read cache-misses as 0 (no multiplexing shown).
+stat_events="task-clock,cycles,instructions,L1-dcache-loads,L1-dcache-load-misses"
+rm -f "$OUT/stat.txt"
+if [[ "$stat" != 0 ]]; then
+    probe="$(perf stat -x, -e cycles,instructions -- true 2>&1 >/dev/null || true)"
+    if grep -q '^[0-9]' <<<"$probe"; then
+        say "perf stat -e $stat_events -- (same command)"
+        perf stat -e "$stat_events" -o "$OUT/stat.txt" -- "${run_cmd[@]}" >"$OUT/stat.run.txt" 2>&1 ||
+            { say "perf stat failed (non-fatal)"; rm -f "$OUT/stat.txt"; }
+    else
+        say "hardware counters not available here: no perf stat (cpu-clock sampling works without them)"
+    fi
+fi
+
 # --- report -----------------------------------------------------------------------------------------------------------
 # Long C++ names are cut at 200 characters (full names: perf report -i perf/out/perf.data).
 report() {
@@ -110,6 +133,13 @@ say "writing report.txt"
     echo
     sed 's/^/  /' "$OUT/run.txt"
     echo
+    if [[ -f "$OUT/stat.txt" ]]; then
+        echo "=== 0. Hardware counters: perf stat of a second, unprofiled run of the same command (scene building included) ==="
+        grep -vE '^#|^ *$' "$OUT/stat.txt" | sed 's/[[:space:]]*$//'
+        grep -m1 'particle-substeps/s' "$OUT/stat.run.txt" | sed 's/^ */  that run: /'
+        awk -v p="$((size * size))" -v n="$steps" '$2 ~ /^instructions/ { gsub(/,/, "", $1); printf "  instructions per particle-substep (whole run, setup included): %.1f\n", $1 / (p * n) }' "$OUT/stat.txt"
+        echo
+    fi
     echo "=== 1. Top symbols, self time (perf report --no-children) ==="
     report --no-children -F overhead,dso,sym -g none --percent-limit 0.3
     echo
@@ -184,7 +214,7 @@ EOF
 
 echo
 echo "perf/record.sh: done. Outputs in ${OUT#"$ROOT/"}/:"
-for f in run.txt report.txt annotate.txt perf.script.txt flamegraph.svg flamegraph-full.svg speedscope.html perf.data; do
+for f in run.txt stat.txt report.txt annotate.txt perf.script.txt flamegraph.svg flamegraph-full.svg speedscope.html perf.data; do
     [[ -e "$OUT/$f" ]] && printf '  %-20s %s\n' "$f" "$(du -h "$OUT/$f" | cut -f1)"
 done
 echo
