@@ -1,0 +1,254 @@
+// Analytic colliders: no particle left inside, outside and pinned particles untouched, velocity response, validation.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+
+#include "drape/colliders.hpp"
+#include "drape/errors.hpp"
+
+namespace drape {
+namespace {
+
+constexpr float slack = 1e-5f; // m: float rounding of a projected point
+
+struct Cloud {
+    std::vector<float> x, y, z, vx, vy, vz, inv_mass;
+    std::size_t size() const { return x.size(); }
+};
+
+// Random points in a box around `centre`, random velocities, every 7th pinned.
+Cloud random_cloud(unsigned seed, Vec3f centre, float half, std::size_t n = 4000) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    Cloud c;
+    for (std::size_t i = 0; i < n; ++i) {
+        c.x.push_back(centre[0] + half * u(rng));
+        c.y.push_back(centre[1] + half * u(rng));
+        c.z.push_back(centre[2] + half * u(rng));
+        c.vx.push_back(u(rng));
+        c.vy.push_back(u(rng));
+        c.vz.push_back(u(rng));
+        c.inv_mass.push_back(i % 7 == 3 ? 0.0f : 100.0f);
+    }
+    return c;
+}
+
+std::vector<Collider> sample_colliders(ColliderSurface s) {
+    return {
+        make_ground(0.1f, s),
+        make_plane({0.1f, 0.2f, 0.3f}, {1.0f, 2.0f, -0.5f}, s),
+        make_sphere({0.1f, 0.2f, -0.1f}, 0.3f, s),
+        make_disc({0.0f, 0.1f, 0.0f}, 0.4f, 0.02f, s),
+        make_capsule({-0.3f, 0.0f, 0.1f}, {0.3f, 0.2f, -0.1f}, 0.15f, s),
+        make_capsule({0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, 0.2f, s), // degenerate: a sphere
+        make_ellipsoid({0.0f, 0.1f, 0.0f}, {0.4f, 0.1f, 0.2f}, s),
+        make_ellipsoid({0.05f, 0.0f, 0.0f}, {0.5f, 0.05f, 0.05f}, s, rotation_about_axis({1, 1, 0}, 0.7f)),
+        make_ellipsoid({0.0f, 0.0f, 0.0f}, {0.2f, 0.2f, 0.2f}, s), // a sphere as an ellipsoid
+    };
+}
+
+TEST(Collider, NoPointLeftInsideOutsidePointsAndPinnedUntouched) {
+    for (ColliderSurface s : {ColliderSurface{0.0f, 0.0f}, ColliderSurface{0.01f, 0.4f}, ColliderSurface{0.05f, 1.0f}}) {
+        unsigned seed = 1;
+        for (const Collider& col : sample_colliders(s)) {
+            SCOPED_TRACE(std::string(collider_kind_name(col.kind)) + " thickness " + std::to_string(s.thickness));
+            const Cloud before = random_cloud(seed++, {0.0f, 0.1f, 0.0f}, 0.6f, 40000);
+            Cloud c = before;
+            collide_range(col, c.x.data(), c.y.data(), c.z.data(), c.vx.data(), c.vy.data(), c.vz.data(),
+                          c.inv_mass.data(), 0, c.size());
+            std::size_t inside_before = 0, moved = 0;
+            for (std::size_t i = 0; i < c.size(); ++i) {
+                const Vec3f p0{before.x[i], before.y[i], before.z[i]};
+                const Vec3f p1{c.x[i], c.y[i], c.z[i]};
+                const bool was_inside = is_inside(col, p0);
+                inside_before += was_inside;
+                const bool same = std::memcmp(&p0, &p1, sizeof p0) == 0 && c.vx[i] == before.vx[i] &&
+                                  c.vy[i] == before.vy[i] && c.vz[i] == before.vz[i];
+                if (before.inv_mass[i] == 0.0f) {
+                    EXPECT_TRUE(same) << "pinned particle " << i << " moved";
+                    continue;
+                }
+                if (!was_inside) {
+                    EXPECT_TRUE(same) << "outside particle " << i << " was touched";
+                }
+                EXPECT_FALSE(is_inside(col, p1, slack)) << "particle " << i << " left inside";
+                moved += !same;
+                // The normal velocity after the response is not inward.
+                if (was_inside) {
+                    const Contact k = project_point(col, p0);
+                    EXPECT_GE(c.vx[i] * k.normal[0] + c.vy[i] * k.normal[1] + c.vz[i] * k.normal[2], -1e-5f);
+                }
+            }
+            EXPECT_GT(inside_before, 20u) << "the test cloud should hit the collider";
+            EXPECT_GT(moved, 0u);
+        }
+    }
+}
+
+TEST(Collider, ProjectionIsTheNearestSurfacePointForExactKinds) {
+    // Sphere: radial; plane: straight up; disc: through the nearest face.
+    const Collider sphere = make_sphere({1, 2, 3}, 0.5f, {0.01f, 0});
+    Contact c = project_point(sphere, {1.1f, 2.0f, 3.0f});
+    ASSERT_TRUE(c.inside);
+    EXPECT_NEAR(c.point[0], 1.51f, 1e-6f);
+    EXPECT_NEAR(c.normal[0], 1.0f, 1e-6f);
+    const Collider ground = make_ground(-0.5f, {0.002f, 0});
+    c = project_point(ground, {0.3f, -0.6f, 0.7f});
+    ASSERT_TRUE(c.inside);
+    EXPECT_EQ(c.point[0], 0.3f);
+    EXPECT_EQ(c.point[1], -0.498f);
+    EXPECT_EQ(c.point[2], 0.7f);
+    EXPECT_FALSE(project_point(ground, {0.0f, -0.497f, 0.0f}).inside);
+    const Collider disc = make_disc({0, 1, 0}, 0.5f, 0.02f, {0.01f, 0});
+    c = project_point(disc, {0.2f, 0.995f, 0.0f}); // inside the slab, near the top
+    ASSERT_TRUE(c.inside);
+    EXPECT_NEAR(c.point[1], 1.01f, 1e-6f);
+    EXPECT_EQ(c.normal[1], 1.0f);
+    c = project_point(disc, {0.505f, 1.005f, 0.0f}); // near the rim: rounded
+    ASSERT_TRUE(c.inside);
+    EXPECT_NEAR(std::hypot(c.point[0] - 0.5f, c.point[1] - 1.0f), 0.01f, 1e-6f);
+    EXPECT_FALSE(project_point(disc, {0.52f, 1.0f, 0.0f}).inside);
+    EXPECT_FALSE(project_point(disc, {0.0f, 0.9f, 0.0f}).inside); // below the thin table
+    const Collider cap = make_capsule({0, 0, 0}, {1, 0, 0}, 0.1f, {0.0f, 0});
+    c = project_point(cap, {0.5f, 0.05f, 0.0f});
+    ASSERT_TRUE(c.inside);
+    EXPECT_NEAR(c.point[1], 0.1f, 1e-6f);
+    EXPECT_NEAR(c.point[0], 0.5f, 1e-6f);
+}
+
+TEST(Collider, EllipsoidClosestPointMatchesBruteForce) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    for (Vec3f axes : {Vec3f{0.22f, 0.045f, 0.045f}, Vec3f{0.16f, 0.30f, 0.10f}, Vec3f{0.3f, 0.3f, 0.3f}}) {
+        // Dense surface samples for the brute-force nearest point.
+        std::vector<Vec3f> surface;
+        const int m = 400;
+        for (int i = 0; i <= m; ++i)
+            for (int j = 0; j < 2 * m; ++j) {
+                const double th = M_PI * i / m, ph = M_PI * j / m;
+                surface.push_back({static_cast<float>(axes[0] * std::sin(th) * std::cos(ph)),
+                                   static_cast<float>(axes[1] * std::sin(th) * std::sin(ph)),
+                                   static_cast<float>(axes[2] * std::cos(th))});
+            }
+        for (int k = 0; k < 60; ++k) {
+            Vec3f q;
+            do {
+                q = {static_cast<float>(axes[0] * u(rng)), static_cast<float>(axes[1] * u(rng)),
+                     static_cast<float>(axes[2] * u(rng))};
+            } while ((q[0] / axes[0]) * (q[0] / axes[0]) + (q[1] / axes[1]) * (q[1] / axes[1]) +
+                         (q[2] / axes[2]) * (q[2] / axes[2]) >=
+                     1.0f);
+            const Vec3f x = ellipsoid_closest_point(axes, q);
+            const float f = (x[0] / axes[0]) * (x[0] / axes[0]) + (x[1] / axes[1]) * (x[1] / axes[1]) +
+                            (x[2] / axes[2]) * (x[2] / axes[2]);
+            EXPECT_GE(f, 1.0f);
+            EXPECT_LT(f, 1.0f + 1e-5f);
+            const double d = std::hypot(double{x[0]} - q[0], double{x[1]} - q[1], double{x[2]} - q[2]);
+            double best = 1e9;
+            for (const Vec3f& s : surface)
+                best = std::min(best, std::hypot(double{s[0]} - q[0], double{s[1]} - q[1], double{s[2]} - q[2]));
+            // The brute force is on a sampled surface: it can only be farther than the true closest point.
+            EXPECT_LE(d, best + 1e-5) << "point " << q[0] << " " << q[1] << " " << q[2];
+            // Closest-point condition: q - x is along the surface normal at x.
+            const double n[3] = {x[0] / (axes[0] * axes[0]), x[1] / (axes[1] * axes[1]), x[2] / (axes[2] * axes[2])};
+            const double r[3] = {double{q[0]} - x[0], double{q[1]} - x[1], double{q[2]} - x[2]};
+            const double c[3] = {r[1] * n[2] - r[2] * n[1], r[2] * n[0] - r[0] * n[2], r[0] * n[1] - r[1] * n[0]};
+            const double nn = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            EXPECT_LT(std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) / nn, 1e-3 * d + 1e-6);
+        }
+    }
+    // The centre: out along the shortest axis.
+    const Vec3f x = ellipsoid_closest_point({0.3f, 0.1f, 0.2f}, {0.0f, 0.0f, 0.0f});
+    EXPECT_NEAR(std::abs(x[1]), 0.1f, 1e-6f);
+}
+
+TEST(Collider, VelocityResponseAndFriction) {
+    const Collider frictionless = make_ground(0.0f, {0.01f, 0.0f});
+    float x = 0.1f, y = -0.02f, z = 0.0f, vx = 2.0f, vy = -3.0f, vz = 0.5f, w = 1.0f;
+    collide_range(frictionless, &x, &y, &z, &vx, &vy, &vz, &w, 0, 1);
+    EXPECT_EQ(y, 0.01f);
+    EXPECT_EQ(x, 0.1f);
+    EXPECT_EQ(vx, 2.0f); // tangential kept
+    EXPECT_EQ(vz, 0.5f);
+    EXPECT_EQ(vy, 0.0f); // inward normal removed
+    // Coulomb: tangential speed reduced by mu |vn|, never reversed.
+    const Collider sticky = make_ground(0.0f, {0.01f, 0.5f});
+    x = 0.0f, y = 0.0f, z = 0.0f, vx = 2.0f, vy = -1.0f, vz = 0.0f;
+    collide_range(sticky, &x, &y, &z, &vx, &vy, &vz, &w, 0, 1);
+    EXPECT_NEAR(vx, 1.5f, 1e-6f);
+    EXPECT_EQ(vy, 0.0f);
+    vx = 0.1f, vy = -1.0f, y = 0.0f;
+    collide_range(sticky, &x, &y, &z, &vx, &vy, &vz, &w, 0, 1);
+    EXPECT_EQ(vx, 0.0f);
+    // Moving away: velocity untouched, position still pushed out.
+    vx = 1.0f, vy = 2.0f, y = 0.0f;
+    collide_range(sticky, &x, &y, &z, &vx, &vy, &vz, &w, 0, 1);
+    EXPECT_EQ(y, 0.01f);
+    EXPECT_EQ(vx, 1.0f);
+    EXPECT_EQ(vy, 2.0f);
+    // Frictionless sphere: tangential velocity kept exactly in direction and size.
+    const Collider ball = make_sphere({0, 0, 0}, 1.0f, {0.0f, 0.0f});
+    x = 0.0f, y = 0.9f, z = 0.0f, vx = 0.7f, vy = -2.0f, vz = -0.3f;
+    collide_range(ball, &x, &y, &z, &vx, &vy, &vz, &w, 0, 1);
+    EXPECT_EQ(vx, 0.7f);
+    EXPECT_EQ(vz, -0.3f);
+    EXPECT_EQ(vy, 0.0f);
+}
+
+TEST(Collider, DefaultBodyLeavesNoPointInside) {
+    const auto body = default_body();
+    ASSERT_EQ(body.size(), 7u);
+    // Points in a shell around the body (the way cloth meets it) and deep inside.
+    Cloud c = random_cloud(5, {0.0f, 0.0f, 0.0f}, 0.65f, 50000);
+    const Cloud before = c;
+    collide_range(std::span<const Collider>(body), c.x.data(), c.y.data(), c.z.data(), c.vx.data(), c.vy.data(),
+                  c.vz.data(), c.inv_mass.data(), 0, c.size());
+    std::size_t inside_before = 0, inside_after = 0;
+    for (std::size_t i = 0; i < c.size(); ++i) {
+        bool was = false, is = false;
+        for (const Collider& col : body) {
+            was = was || is_inside(col, {before.x[i], before.y[i], before.z[i]});
+            is = is || is_inside(col, {c.x[i], c.y[i], c.z[i]}, slack);
+        }
+        if (before.inv_mass[i] == 0.0f) continue;
+        inside_before += was;
+        inside_after += is;
+        if (!was) {
+            EXPECT_EQ(c.x[i], before.x[i]);
+        }
+    }
+    std::printf("default body: %zu of %zu random points inside before, %zu after\n", inside_before, c.size(),
+                inside_after);
+    EXPECT_GT(inside_before, 500u);
+    EXPECT_EQ(inside_after, 0u);
+}
+
+TEST(Collider, RejectsBadParametersNamingTheField) {
+    auto msg = [](auto&& f) -> std::string {
+        try {
+            f();
+        } catch (const InvalidInput& e) {
+            return e.what();
+        }
+        return "";
+    };
+    EXPECT_NE(msg([] { make_sphere({0, 0, 0}, 0.0f); }).find("sphere.radius"), std::string::npos);
+    EXPECT_NE(msg([] { make_sphere({0, 0, 0}, 1.0f, {-0.1f, 0.2f}); }).find("sphere.thickness"), std::string::npos);
+    EXPECT_NE(msg([] { make_sphere({0, 0, 0}, 1.0f, {0.1f, 1.5f}); }).find("[0.000000, 1.000000]"),
+              std::string::npos);
+    EXPECT_NE(msg([] { make_disc({0, 0, 0}, 1.0f, 0.0f); }).find("disc.height"), std::string::npos);
+    EXPECT_NE(msg([] { make_capsule({0, 0, 0}, {1, 0, 0}, -1.0f); }).find("capsule.radius"), std::string::npos);
+    EXPECT_NE(msg([] { make_ellipsoid({0, 0, 0}, {1, 0, 1}); }).find("ellipsoid.semi_axes[1]"), std::string::npos);
+    EXPECT_NE(msg([] { make_ellipsoid({0, 0, 0}, {1, 1, 1}, {}, {1, 0, 0, 0, 1, 0, 0, 0, -1}); }).find("determinant"),
+              std::string::npos);
+    EXPECT_NE(msg([] { make_ellipsoid({0, 0, 0}, {1, 1, 1}, {}, {1, 0, 0, 0, 2, 0, 0, 0, 1}); }).find("orthonormal"),
+              std::string::npos);
+    EXPECT_NE(msg([] { make_plane({0, 0, 0}, {0, 0, 0}); }).find("plane.normal"), std::string::npos);
+    EXPECT_NE(msg([] { make_sphere({NAN, 0, 0}, 1.0f); }).find("sphere.centre[0]"), std::string::npos);
+    EXPECT_NE(msg([] { make_ground(NAN); }).find("ground.height"), std::string::npos);
+}
+
+} // namespace
+} // namespace drape
