@@ -73,6 +73,16 @@ int main(int argc, char** argv) {
     cmd->add_option("--kernel", run.kernel, "Spring kernel: grid stencil, general CSR, or auto")
         ->check(CLI::IsMember({"auto", "grid", "csr"}))
         ->capture_default_str();
+    cmd->add_option("--strain-limit", run.strain_limit,
+                    "Provot strain limiting: largest stretch of structural, shear and seam springs (0.1 = 10%; 0 = off)")
+        ->check(in_range<float>(0.0f, 10.0f))
+        ->capture_default_str();
+    cmd->add_option("--strain-passes", run.strain_passes, "Strain-limiting sweeps over all colour groups per substep")
+        ->check(in_range<std::uint32_t>(1, 100))
+        ->capture_default_str();
+    cmd->add_option("--strain-every", run.strain_every, "Run strain limiting after every K-th substep")
+        ->check(in_range<std::uint32_t>(1, 1000))
+        ->capture_default_str();
     cmd->add_flag("--staged", run.staged, "Run each stage as its own pass instead of the fused pass");
     cmd->add_flag("--json", run.json, "Print exactly one JSON object on stdout");
 

@@ -76,6 +76,7 @@ int run_command(const RunOptions& o) {
     sp.wind.strength = o.wind_strength;
     sp.kernel = o.kernel == "grid" ? KernelPath::grid : o.kernel == "csr" ? KernelPath::csr : KernelPath::automatic;
     sp.fused = !o.staged;
+    sp.strain_limit = {o.strain_limit, o.strain_passes, o.strain_every};
     const StabilityBound bound = stability_bound(scene.cloth, sp.air_drag);
     const bool dt_default = !o.dt.has_value();
     sp.dt = static_cast<float>(dt_default ? 0.9 * bound.dt_max : *o.dt);
@@ -127,6 +128,9 @@ int run_command(const RunOptions& o) {
     j["fused"] = sp.fused;
     j["stiffness"] = o.stiffness;
     j["wind"] = o.wind;
+    j["strain_limit"] = o.strain_limit;
+    j["strain_passes"] = o.strain_passes;
+    j["strain_every"] = o.strain_every;
     j["wall_seconds"] = wall;
     j["particle_substeps_per_second"] = rate;
     j["stages"] = sim.stage_names();

@@ -22,6 +22,9 @@ struct RunOptions {
     float wind_strength = 2.0f;
     std::string kernel = "auto";
     bool staged = false;
+    float strain_limit = 0.0f;
+    std::uint32_t strain_passes = 4;
+    std::uint32_t strain_every = 1;
     bool json = false;
 };
 

@@ -27,6 +27,8 @@ const char* stage_name(Stage stage) noexcept {
     case Stage::external_forces: return "external_forces";
     case Stage::spring_forces: return "spring_forces";
     case Stage::integrate: return "integrate";
+    case Stage::strain_limit: return "strain_limit";
+    case Stage::collide: return "collide";
     case Stage::count: break;
     }
     return "unknown";
@@ -49,6 +51,21 @@ void validate_params(const SimulationParams& p) {
           "[0, 100] 1/s");
     check(std::isfinite(p.wind.strength) && p.wind.strength >= 0.0f && p.wind.strength <= 100.0f, "wind strength",
           p.wind.strength, "[0, 100] m/s^2");
+    check(std::isfinite(p.strain_limit.ratio) && p.strain_limit.ratio >= 0.0f && p.strain_limit.ratio <= 10.0f,
+          "strain limit ratio", p.strain_limit.ratio, "[0, 10] (0 = off)");
+    check(p.strain_limit.passes >= 1 && p.strain_limit.passes <= 100, "strain limit passes", p.strain_limit.passes,
+          "[1, 100]");
+    check(p.strain_limit.every >= 1 && p.strain_limit.every <= 1000, "strain limit interval", p.strain_limit.every,
+          "[1, 1000] substeps");
+    if (p.colliders.size() > 64)
+        throw InvalidInput("colliders: " + std::to_string(p.colliders.size()) + " given, at most 64 allowed");
+    for (std::size_t k = 0; k < p.colliders.size(); ++k) {
+        try {
+            check_collider(p.colliders[k]);
+        } catch (const InvalidInput& e) {
+            throw InvalidInput("colliders[" + std::to_string(k) + "]: " + e.what());
+        }
+    }
 }
 
 Simulation::Simulation(Cloth cloth, const InitialState& initial, const SimulationParams& params)
@@ -74,6 +91,7 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
     for (AlignedArray<float>* a : {&fx_, &fy_, &fz_, &ax_, &ay_, &az_}) a->reset(padded);
     block_ok_.assign(cloth_.block_count(), 1);
     inv_mass_authored_.assign(cloth_.inv_mass.begin(), cloth_.inv_mass.end());
+    if (params_.strain_limit.ratio > 0.0f) cook_strain_limit();
 
     StateBuffer& s = buffers_[0];
     std::memcpy(s.x.data(), initial.x.data(), n * sizeof(float));
@@ -125,6 +143,7 @@ void Simulation::set_params(const SimulationParams& params) {
     }
     params_ = params;
     kernel_ = kernel;
+    if (params_.strain_limit.ratio > 0.0f) cook_strain_limit();
 }
 
 void Simulation::set_material(SpringKind kind, SpringMaterial material) {
@@ -208,6 +227,8 @@ std::array<float, 3> Simulation::velocity(std::size_t i) const noexcept {
 std::vector<std::string> Simulation::stage_names() const {
     std::vector<std::string> out{"external_forces", "spring_forces", "spring_damping", "integrate", "pins"};
     if (params_.wind.enabled) out.insert(out.begin() + 1, "wind");
+    if (params_.strain_limit.ratio > 0.0f) out.push_back("strain_limit");
+    if (!params_.colliders.empty()) out.push_back("collide");
     return out;
 }
 

@@ -1,4 +1,6 @@
 // One substep: the pipeline that runs the stages over fixed particle blocks.
+//   stages 1-3 (external forces, spring forces, integrate + pins): fused or staged, below;
+//   stage 5 strain_limit (strain_limit.cpp) and stage 6 collide (collide.cpp) on the freshly written buffer.
 //
 // Fused (default): for each SIMD batch of a block, load the particle's own state once, sum its springs
 // (stage 2), add external accelerations (stage 1), integrate and apply pins (stage 3), store into the other state
@@ -154,6 +156,8 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
             });
         }
         check_blocks(steps_done_);
+        strain_limit_stage<Parallel>(buffers_[1 - current_]);
+        collide_stage<Parallel>(buffers_[1 - current_]);
         current_ = 1 - current_;
         ++steps_done_;
     }
@@ -163,6 +167,8 @@ void Simulation::step(std::size_t count) { step_impl<true>(count); }
 void Simulation::step_serial(std::size_t count) { step_impl<false>(count); }
 
 void Simulation::run_stage(Stage stage) {
+    if (stage == Stage::strain_limit) return strain_limit_stage<true>(cur());
+    if (stage == Stage::collide) return collide_stage<true>(cur());
     const kernels::StepContext c = make_context(steps_done_);
     const Integrator integ = params_.integrator;
     for_each_block<true>(cloth_, [&](std::size_t b, std::size_t begin, std::size_t end) {
@@ -170,7 +176,7 @@ void Simulation::run_stage(Stage stage) {
         case Stage::external_forces: kernels::external_forces_range(c, integ, params_.wind.enabled, begin, end); break;
         case Stage::spring_forces: kernels::spring_forces_range(c, integ, kernel_, begin, end); break;
         case Stage::integrate: kernels::integrate_range(c, integ, begin, end, b); break;
-        case Stage::count: break;
+        default: break;
         }
     });
 }

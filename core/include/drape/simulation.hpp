@@ -18,6 +18,8 @@
 #include <vector>
 
 #include "drape/cloth.hpp"
+#include "drape/colliders.hpp"
+#include "drape/colouring.hpp"
 #include "drape/errors.hpp"
 
 namespace drape {
@@ -44,6 +46,15 @@ struct WindField {
     float strength = 2.0f; ///< m/s^2, 0..100
 };
 
+/// Provot strain limiting (seed 001 section 2; Provot 1995): after each substep, every structural, shear and seam
+/// spring longer than (1 + ratio) l0 has its ends moved toward each other (mass-weighted; pinned ends stay), colour
+/// group by colour group, `passes` times.
+struct StrainLimit {
+    float ratio = 0.0f;         ///< critical stretch, 0 = off, 0..10 (0.1 = 10%)
+    std::uint32_t passes = 4;   ///< sweeps over all groups each time it runs, 1..100
+    std::uint32_t every = 1;    ///< runs after every `every`-th substep, 1..1000 (1 = Provot: after each step)
+};
+
 struct SimulationParams {
     float dt = 0.0f; ///< s, one substep; must be below the explicit stability bound (stability.hpp)
     Integrator integrator = Integrator::symplectic_euler;
@@ -52,6 +63,8 @@ struct SimulationParams {
     WindField wind;
     KernelPath kernel = KernelPath::automatic;
     bool fused = true; ///< false runs each stage as its own pass (reference / per-stage profiling)
+    StrainLimit strain_limit;
+    std::vector<Collider> colliders; ///< analytic colliders, applied in order after strain limiting
 };
 
 /// Hot state: one buffer of the double-buffered SoA arrays. u, v, w hold velocities (symplectic Euler) or the
@@ -68,7 +81,7 @@ struct Health {
 };
 
 /// Per-stage names in step order; the same strings label bench counters and profiler zones.
-enum class Stage : std::uint8_t { external_forces, spring_forces, integrate, count };
+enum class Stage : std::uint8_t { external_forces, spring_forces, integrate, strain_limit, collide, count };
 const char* stage_name(Stage stage) noexcept;
 
 class Simulation {
@@ -101,6 +114,8 @@ class Simulation {
     std::vector<std::string> stage_names() const;
 
     Health health() const;
+    /// Colour groups used by strain limiting (empty until strain limiting is first enabled).
+    const ColourGroups& strain_limit_groups() const noexcept { return limit_groups_; }
     /// 64-bit FNV-1a hash of the position bits (x, y, z of particle 0, then particle 1, ...).
     std::uint64_t checksum() const noexcept;
 
@@ -157,6 +172,14 @@ class Simulation {
     AlignedArray<float> fx_, fy_, fz_, ax_, ay_, az_;
     std::vector<std::uint8_t> block_ok_; ///< per block: 1 when every value the block wrote is finite
     std::vector<float> inv_mass_authored_; ///< inverse masses as cooked, for unpinning
+    // Strain limiting (cooked when first enabled): colour groups over structural, shear and seam springs, with the
+    // spring ends and rest lengths copied in group order for linear sweeps.
+    ColourGroups limit_groups_;
+    std::vector<std::uint32_t> limit_a_, limit_b_;
+    std::vector<float> limit_rest_;
+    void cook_strain_limit();
+    template <bool Parallel> void strain_limit_stage(StateBuffer& out);
+    template <bool Parallel> void collide_stage(StateBuffer& out);
     std::size_t grabbed_ = SIZE_MAX;
     bool grabbed_was_pinned_ = false;
     std::array<float, 3> grab_target_{};

@@ -1,0 +1,55 @@
+// Stage 6: collisions with analytic colliders (core/src/colliders.cpp has the geometry). Runs on the state just
+// written by integration and strain limiting, per fixed particle block, so no particle is left inside a collider at
+// the end of a substep. Verlet stores x_prev, not v: the block's velocities are made explicit in scratch, collided,
+// and x_prev rewritten only where the collision changed something (others keep their exact bits).
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "drape/simulation.hpp"
+
+namespace drape {
+
+template <bool Parallel> void Simulation::collide_stage(StateBuffer& out) {
+    const std::vector<Collider>& colliders = params_.colliders;
+    if (colliders.empty()) return;
+    const std::size_t n = cloth_.particle_count;
+    const bool verlet = params_.integrator == Integrator::verlet;
+    const float dt = params_.dt, inv_dt = 1.0f / params_.dt;
+    auto block = [&](std::size_t b) {
+        const std::size_t begin = b * block_particles, end = std::min(begin + block_particles, n);
+        if (!verlet) {
+            collide_range(colliders, out.x.data(), out.y.data(), out.z.data(), out.u.data(), out.v.data(),
+                          out.w.data(), cloth_.inv_mass.data(), begin, end);
+            return;
+        }
+        // Scratch: ax..az hold velocities, fx..fz the positions before the collision.
+        float *vx = ax_.data(), *vy = ay_.data(), *vz = az_.data();
+        float *px = fx_.data(), *py = fy_.data(), *pz = fz_.data();
+        for (std::size_t i = begin; i < end; ++i) {
+            vx[i] = (out.x[i] - out.u[i]) * inv_dt;
+            vy[i] = (out.y[i] - out.v[i]) * inv_dt;
+            vz[i] = (out.z[i] - out.w[i]) * inv_dt;
+            px[i] = out.x[i];
+            py[i] = out.y[i];
+            pz[i] = out.z[i];
+        }
+        collide_range(colliders, out.x.data(), out.y.data(), out.z.data(), vx, vy, vz, cloth_.inv_mass.data(), begin,
+                      end);
+        for (std::size_t i = begin; i < end; ++i) {
+            if (out.x[i] == px[i] && out.y[i] == py[i] && out.z[i] == pz[i]) continue;
+            out.u[i] = out.x[i] - vx[i] * dt;
+            out.v[i] = out.y[i] - vy[i] * dt;
+            out.w[i] = out.z[i] - vz[i] * dt;
+        }
+    };
+    const std::size_t blocks = (n + block_particles - 1) / block_particles;
+    if constexpr (Parallel)
+        tbb::parallel_for(std::size_t{0}, blocks, block);
+    else
+        for (std::size_t b = 0; b < blocks; ++b) block(b);
+}
+
+template void Simulation::collide_stage<true>(StateBuffer&);
+template void Simulation::collide_stage<false>(StateBuffer&);
+
+} // namespace drape

@@ -1,0 +1,123 @@
+// Stage 5: Provot strain limiting ("inverse dynamics", seed 001 section 2; X. Provot, Deformation constraints in a
+// mass-spring model to describe rigid cloth behavior, 1995).
+//
+// After integration, a spring of rest length l0 longer than l_max = (1 + ratio) l0 has its ends moved toward each
+// other by the excess, shared by inverse mass (a pinned end does not move):
+//   d = x_b - x_a, l = |d|, e = (l - l_max) / (l (w_a + w_b)),  x_a += w_a e d,  x_b -= w_b e d.
+// The velocity changes by the displacement divided by the time over which the excess built up, K dt when limiting
+// runs after every K-th substep (K = 1: Provot's after-each-step), so the correction is not undone by the next step
+// and never injects more than it removes. Symplectic Euler: v += dx / (K dt). Verlet: moving x alone changes the
+// implied velocity (x - x_prev)/dt by dx/dt, so x_prev moves by dx (1 - 1/K) as well.
+// Springs are processed colour group by colour group (no two springs of a group share a particle: plain writes, in
+// parallel), groups in a fixed order, `passes` times; the serial overflow group (if any) last. Results do not depend
+// on the thread count.
+#include <cmath>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "drape/simulation.hpp"
+
+namespace drape {
+
+namespace {
+
+/// Springs per parallel chunk of a colour group (fixed: the partition never depends on the thread count).
+constexpr std::size_t limit_chunk = 4096;
+
+struct LimitArgs {
+    float* __restrict x;
+    float* __restrict y;
+    float* __restrict z;
+    float* __restrict u;
+    float* __restrict v;
+    float* __restrict w;
+    const float* __restrict inv_mass;
+    const std::uint32_t* __restrict a;
+    const std::uint32_t* __restrict b;
+    const float* __restrict rest;
+    float stretch;     ///< 1 + ratio
+    float vel_scale;   ///< Euler: 1 / (K dt), the velocity change per unit displacement; 0 for Verlet
+    float prev_scale;  ///< Verlet: 1 - 1/K, the x_prev shift per unit displacement; 0 for Euler
+};
+
+void limit_range(const LimitArgs& c, std::size_t begin, std::size_t end) noexcept {
+    for (std::size_t k = begin; k < end; ++k) {
+        const std::uint32_t ia = c.a[k], ib = c.b[k];
+        const float dx = c.x[ib] - c.x[ia], dy = c.y[ib] - c.y[ia], dz = c.z[ib] - c.z[ia];
+        const float l2 = dx * dx + dy * dy + dz * dz;
+        const float l_max = c.stretch * c.rest[k];
+        if (!(l2 > l_max * l_max)) continue;
+        const float wa = c.inv_mass[ia], wb = c.inv_mass[ib];
+        const float wsum = wa + wb;
+        if (wsum == 0.0f) continue;
+        const float l = std::sqrt(l2);
+        const float e = (l - l_max) / (l * wsum);
+        const float ea = wa * e, eb = wb * e;
+        c.x[ia] += ea * dx;
+        c.y[ia] += ea * dy;
+        c.z[ia] += ea * dz;
+        c.x[ib] -= eb * dx;
+        c.y[ib] -= eb * dy;
+        c.z[ib] -= eb * dz;
+        const float s = c.vel_scale + c.prev_scale; // one of the two is 0
+        if (s != 0.0f) {
+            const float va = ea * s, vb = eb * s;
+            c.u[ia] += va * dx;
+            c.v[ia] += va * dy;
+            c.w[ia] += va * dz;
+            c.u[ib] -= vb * dx;
+            c.v[ib] -= vb * dy;
+            c.w[ib] -= vb * dz;
+        }
+    }
+}
+
+} // namespace
+
+void Simulation::cook_strain_limit() {
+    if (!limit_a_.empty() || cloth_.edges.empty()) return;
+    std::vector<std::uint32_t> subset;
+    for (std::uint32_t k = 0; k < cloth_.edges.size(); ++k)
+        if (cloth_.edges[k].kind != SpringKind::bend) subset.push_back(k);
+    limit_groups_ = colour_edges(cloth_.edges, cloth_.particle_count, subset);
+    limit_a_.resize(limit_groups_.edge_index.size());
+    limit_b_.resize(limit_a_.size());
+    limit_rest_.resize(limit_a_.size());
+    for (std::size_t k = 0; k < limit_a_.size(); ++k) {
+        const Edge& e = cloth_.edges[limit_groups_.edge_index[k]];
+        limit_a_[k] = e.a;
+        limit_b_[k] = e.b;
+        limit_rest_[k] = e.rest;
+    }
+}
+
+template <bool Parallel> void Simulation::strain_limit_stage(StateBuffer& out) {
+    const StrainLimit& sl = params_.strain_limit;
+    if (sl.ratio <= 0.0f || limit_a_.empty() || (steps_done_ + 1) % sl.every != 0) return;
+    LimitArgs c{out.x.data(), out.y.data(), out.z.data(), out.u.data(), out.v.data(), out.w.data(),
+                cloth_.inv_mass.data(), limit_a_.data(), limit_b_.data(), limit_rest_.data(), 1.0f + sl.ratio,
+                0.0f, 0.0f};
+    if (params_.integrator == Integrator::symplectic_euler)
+        c.vel_scale = 1.0f / (float(sl.every) * params_.dt);
+    else
+        c.prev_scale = 1.0f - 1.0f / float(sl.every);
+    for (std::uint32_t pass = 0; pass < sl.passes; ++pass) {
+        for (std::size_t g = 0; g < limit_groups_.group_count(); ++g) {
+            const std::size_t begin = limit_groups_.group_offsets[g], end = limit_groups_.group_offsets[g + 1];
+            const std::size_t chunks = (end - begin + limit_chunk - 1) / limit_chunk;
+            if (Parallel && !limit_groups_.is_overflow(g) && chunks > 1) {
+                tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t ch) {
+                    limit_range(c, begin + ch * limit_chunk, std::min(end, begin + (ch + 1) * limit_chunk));
+                });
+            } else {
+                limit_range(c, begin, end); // small group, serial twin, or the overflow group
+            }
+        }
+    }
+}
+
+template void Simulation::strain_limit_stage<true>(StateBuffer&);
+template void Simulation::strain_limit_stage<false>(StateBuffer&);
+
+} // namespace drape

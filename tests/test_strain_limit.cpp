@@ -1,0 +1,102 @@
+// Provot strain limiting (core/src/strain_limit.cpp).
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include <tbb/global_control.h>
+
+#include "test_helpers.hpp"
+
+using namespace drape;
+
+namespace {
+
+Simulation soft_hang(std::uint32_t n, StrainLimit limit, Integrator integ = Integrator::symplectic_euler) {
+    HangParams hp;
+    hp.n = n;
+    hp.stiffness = 100.0f; // soft: overstretches without limiting
+    SceneBuild scene = build_hang_scene(hp);
+    SimulationParams p = drape::testing::default_params(scene.cloth, integ);
+    p.strain_limit = limit;
+    return Simulation(std::move(scene.cloth), scene.initial, p);
+}
+
+// Provot's projection is Gauss-Seidel over colour groups: a fixed number of passes converges locally at once but
+// propagates a global stretch only a few springs per pass, so during the fast swing the limit is approached, not met
+// (docs/garments.md has the table). At the end of 2 s of "hang" - the state BENCH.md's quality figure measures - it
+// holds to 1e-3, and at every sample the limited cloth is less stretched than the free one.
+TEST(StrainLimit, KeepsMaxStrainWithinTheLimitAtN100) {
+    Simulation free_cloth = soft_hang(100, {0.0f, 1, 1});
+    Simulation limited = soft_hang(100, {0.1f, 8, 1});
+    const std::size_t steps = static_cast<std::size_t>(2.0 / limited.params().dt);
+    for (std::size_t done = 0; done < steps; done += 500) {
+        limited.step(500);
+        free_cloth.step(500);
+        const float lim = limited.health().max_structural_strain, fre = free_cloth.health().max_structural_strain;
+        if (fre > 0.1f) {
+            EXPECT_LT(lim, fre) << "t = " << limited.time();
+        }
+    }
+    EXPECT_GT(free_cloth.health().max_structural_strain, 0.1f) << "the test needs a cloth that overstretches";
+    EXPECT_LE(limited.health().max_structural_strain, 0.1f + 1e-3f);
+    EXPECT_TRUE(limited.health().finite);
+}
+
+TEST(StrainLimit, PinnedEndsStayPut) {
+    Simulation sim = soft_hang(40, {0.05f, 4, 1});
+    const float x0 = sim.x()[0], x1 = sim.x()[39];
+    sim.step(2000);
+    EXPECT_EQ(sim.x()[0], x0);
+    EXPECT_EQ(sim.y()[0], 0.0f);
+    EXPECT_EQ(sim.x()[39], x1);
+    EXPECT_EQ(sim.y()[39], 0.0f);
+}
+
+TEST(StrainLimit, ColourGroupsShareNoParticleAndCoverEverySpringOnce) {
+    Simulation sim = soft_hang(33, {0.1f, 1, 1});
+    const ColourGroups& g = sim.strain_limit_groups();
+    ASSERT_GT(g.group_count(), 0u);
+    std::multiset<std::uint32_t> seen;
+    for (std::size_t k = 0; k < g.group_count(); ++k) {
+        std::set<std::uint32_t> touched;
+        for (std::uint32_t e : g.group(k)) {
+            seen.insert(e);
+            if (g.is_overflow(k)) continue;
+            const Edge& edge = sim.cloth().edges[e];
+            EXPECT_TRUE(touched.insert(edge.a).second) << "group " << k << " reuses particle " << edge.a;
+            EXPECT_TRUE(touched.insert(edge.b).second) << "group " << k << " reuses particle " << edge.b;
+        }
+    }
+    std::size_t limited = 0;
+    for (std::uint32_t e = 0; e < sim.cloth().edges.size(); ++e) {
+        const bool bend = sim.cloth().edges[e].kind == SpringKind::bend;
+        EXPECT_EQ(seen.count(e), bend ? 0u : 1u) << "edge " << e;
+        limited += !bend;
+    }
+    EXPECT_EQ(seen.size(), limited);
+}
+
+TEST(StrainLimit, ThreadCountIndependentAndEqualToSerialTwin) {
+    auto run = [](std::size_t threads, bool serial) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+        Simulation sim = soft_hang(120, {0.05f, 3, 1}); // 14,400 particles: groups of several chunks
+        serial ? sim.step_serial(300) : sim.step(300);
+        return sim.checksum();
+    };
+    const std::uint64_t one = run(1, false);
+    EXPECT_EQ(one, run(2, false));
+    EXPECT_EQ(one, run(3, false));
+    EXPECT_EQ(one, run(2, true));
+}
+
+TEST(StrainLimit, IntervalStaysStableForBothIntegrators) {
+    for (Integrator integ : {Integrator::symplectic_euler, Integrator::verlet}) {
+        Simulation sim = soft_hang(60, {0.1f, 4, 8}, integ);
+        sim.step(static_cast<std::size_t>(1.0 / sim.params().dt));
+        const Health h = sim.health();
+        EXPECT_TRUE(h.finite) << integrator_name(integ);
+        EXPECT_LT(h.max_structural_strain, 0.15f) << integrator_name(integ);
+    }
+}
+
+} // namespace
