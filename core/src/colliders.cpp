@@ -55,114 +55,143 @@ Collider with_surface(ColliderKind kind, const ColliderSurface& s) {
 
 inline float dot3(const Vec3f& a, const Vec3f& b) noexcept { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
-// Pushes p out of a sphere of radius `radius` (already inflated) around c.
-inline Contact project_round(const Vec3f& c, float radius, const Vec3f& p) noexcept {
-    Contact out;
-    out.point = p;
-    const float dx = p[0] - c[0], dy = p[1] - c[1], dz = p[2] - c[2];
-    const float d2 = dx * dx + dy * dy + dz * dz;
-    if (!(d2 < radius * radius)) return out;
-    out.inside = true;
-    const float d = std::sqrt(d2);
-    out.normal = d > 1e-12f ? Vec3f{dx / d, dy / d, dz / d} : Vec3f{0.0f, 1.0f, 0.0f};
-    out.point = {c[0] + out.normal[0] * radius, c[1] + out.normal[1] * radius, c[2] + out.normal[2] * radius};
-    return out;
+// ---------------------------------------------------------------------------------------------------------------------
+// Inside tests: branch-free arithmetic on one point, the same expressions in the batch pre-pass and in the projection
+// (so a point the pre-pass calls outside is exactly one the projection would leave alone).
+
+inline float capsule_t(const Collider& col, float x, float y, float z) noexcept {
+    const float abx = col.axis[0] - col.centre[0], aby = col.axis[1] - col.centre[1], abz = col.axis[2] - col.centre[2];
+    const float len2 = abx * abx + aby * aby + abz * abz;
+    const float t = ((x - col.centre[0]) * abx + (y - col.centre[1]) * aby + (z - col.centre[2]) * abz) /
+                    (len2 > 0.0f ? len2 : 1.0f);
+    return std::min(std::max(t, 0.0f), 1.0f);
 }
 
-inline Vec3f capsule_closest(const Collider& col, const Vec3f& p) noexcept {
-    const Vec3f& a = col.centre;
-    const Vec3f& b = col.axis;
-    const Vec3f ab{b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    const Vec3f ap{p[0] - a[0], p[1] - a[1], p[2] - a[2]};
-    const float len2 = dot3(ab, ab);
-    const float t = len2 > 0.0f ? std::clamp(dot3(ap, ab) / len2, 0.0f, 1.0f) : 0.0f;
-    return {a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]};
+// Ellipsoid level f = sum (q_i / A_i)^2 of the inflated ellipsoid (A = semi-axes + thickness); q = R^T (p - c).
+inline float ellipsoid_level(const Collider& col, float x, float y, float z, Vec3f* out_local = nullptr) noexcept {
+    const auto& R = col.rotation;
+    const float wx = x - col.centre[0], wy = y - col.centre[1], wz = z - col.centre[2];
+    const float qx = R[0] * wx + R[3] * wy + R[6] * wz, qy = R[1] * wx + R[4] * wy + R[7] * wz,
+                qz = R[2] * wx + R[5] * wy + R[8] * wz;
+    if (out_local) *out_local = {qx, qy, qz};
+    const float ax = qx / (col.size[0] + col.thickness), ay = qy / (col.size[1] + col.thickness),
+                az = qz / (col.size[2] + col.thickness);
+    return ax * ax + ay * ay + az * az;
 }
 
-Contact project_plane(const Collider& col, const Vec3f& p) noexcept {
-    Contact out;
-    out.point = p;
+template <ColliderKind K> inline bool inside_kind(const Collider& col, float x, float y, float z) noexcept {
+    if constexpr (K == ColliderKind::plane) {
+        const float d = (x - col.centre[0]) * col.axis[0] + (y - col.centre[1]) * col.axis[1] +
+                        (z - col.centre[2]) * col.axis[2];
+        return d < col.thickness;
+    } else if constexpr (K == ColliderKind::sphere) {
+        const float dx = x - col.centre[0], dy = y - col.centre[1], dz = z - col.centre[2];
+        const float r = col.size[0] + col.thickness;
+        return dx * dx + dy * dy + dz * dz < r * r;
+    } else if constexpr (K == ColliderKind::capsule) {
+        const float t = capsule_t(col, x, y, z);
+        const float dx = x - (col.centre[0] + t * (col.axis[0] - col.centre[0]));
+        const float dy = y - (col.centre[1] + t * (col.axis[1] - col.centre[1]));
+        const float dz = z - (col.centre[2] + t * (col.axis[2] - col.centre[2]));
+        const float r = col.size[0] + col.thickness;
+        return dx * dx + dy * dy + dz * dz < r * r;
+    } else if constexpr (K == ColliderKind::disc) {
+        const float top = col.centre[1], bottom = col.centre[1] - col.size[1];
+        const float dx = x - col.centre[0], dz = z - col.centre[2];
+        const float er = std::max(std::sqrt(dx * dx + dz * dz) - col.size[0], 0.0f);
+        const float ey = std::max(std::max(y - top, bottom - y), 0.0f);
+        // Inside the solid (er = ey = 0) or within thickness of it; bitwise ops keep the loop branch-free.
+        return ((er == 0.0f) & (ey == 0.0f)) | (er * er + ey * ey < col.thickness * col.thickness);
+    } else {
+        return ellipsoid_level(col, x, y, z) < 1.0f;
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------------------------
+// Projections (called only for points inside). Each returns the point on the inflated surface and its normal.
+
+struct Projection {
+    Vec3f point, normal;
+};
+
+inline Projection project_round(const Vec3f& c, float radius, float x, float y, float z) noexcept {
+    const float dx = x - c[0], dy = y - c[1], dz = z - c[2];
+    const float d = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const Vec3f n = d > 1e-12f ? Vec3f{dx / d, dy / d, dz / d} : Vec3f{0.0f, 1.0f, 0.0f};
+    return {{c[0] + n[0] * radius, c[1] + n[1] * radius, c[2] + n[2] * radius}, n};
+}
+
+inline Projection project_plane(const Collider& col, float x, float y, float z) noexcept {
     const Vec3f& n = col.axis;
-    const float d = (p[0] - col.centre[0]) * n[0] + (p[1] - col.centre[1]) * n[1] + (p[2] - col.centre[2]) * n[2];
-    if (!(d < col.thickness)) return out;
-    out.inside = true;
-    out.normal = n;
-    const float push = col.thickness - d;
-    out.point = {p[0] + push * n[0], p[1] + push * n[1], p[2] + push * n[2]};
     // The ground (normal exactly +y): set the height exactly, no rounding in x, z.
-    if (n[0] == 0.0f && n[2] == 0.0f && n[1] == 1.0f) out.point = {p[0], col.centre[1] + col.thickness, p[2]};
-    return out;
+    if (n[0] == 0.0f && n[2] == 0.0f && n[1] == 1.0f) return {{x, col.centre[1] + col.thickness, z}, n};
+    const float d = (x - col.centre[0]) * n[0] + (y - col.centre[1]) * n[1] + (z - col.centre[2]) * n[2];
+    const float push = col.thickness - d;
+    return {{x + push * n[0], y + push * n[1], z + push * n[2]}, n};
 }
 
 // Solid vertical cylinder [0, R] x [top - H, top] in (radius, y), grown by t (rounded rims).
-Contact project_disc(const Collider& col, const Vec3f& p) noexcept {
-    Contact out;
-    out.point = p;
+inline Projection project_disc(const Collider& col, float x, float y, float z) noexcept {
     const float R = col.size[0], t = col.thickness;
     const float top = col.centre[1], bottom = col.centre[1] - col.size[1];
-    const float dx = p[0] - col.centre[0], dz = p[2] - col.centre[2];
+    const float dx = x - col.centre[0], dz = z - col.centre[2];
     const float r = std::sqrt(dx * dx + dz * dz);
-    // Quick reject: outside the grown bounding cylinder.
-    if (!(r < R + t) || !(p[1] < top + t) || !(p[1] > bottom - t)) return out;
     const float ux = r > 0.0f ? dx / r : 1.0f, uz = r > 0.0f ? dz / r : 0.0f; // radial direction
-    if (r <= R && p[1] <= top && p[1] >= bottom) {
+    if (r <= R && y <= top && y >= bottom) {
         // Inside the solid: leave through the nearest face.
-        const float to_top = top - p[1], to_side = R - r, to_bottom = p[1] - bottom;
-        out.inside = true;
-        if (to_top <= to_side && to_top <= to_bottom) {
-            out.normal = {0.0f, 1.0f, 0.0f};
-            out.point = {p[0], top + t, p[2]};
-        } else if (to_side <= to_bottom) {
-            out.normal = {ux, 0.0f, uz};
-            out.point = {col.centre[0] + ux * (R + t), p[1], col.centre[2] + uz * (R + t)};
-        } else {
-            out.normal = {0.0f, -1.0f, 0.0f};
-            out.point = {p[0], bottom - t, p[2]};
-        }
-        return out;
+        const float to_top = top - y, to_side = R - r, to_bottom = y - bottom;
+        if (to_top <= to_side && to_top <= to_bottom) return {{x, top + t, z}, {0.0f, 1.0f, 0.0f}};
+        if (to_side <= to_bottom)
+            return {{col.centre[0] + ux * (R + t), y, col.centre[2] + uz * (R + t)}, {ux, 0.0f, uz}};
+        return {{x, bottom - t, z}, {0.0f, -1.0f, 0.0f}};
     }
-    // Outside the solid: within t of its closest point?
-    const float qr = std::min(r, R), qy = std::clamp(p[1], bottom, top);
-    const float er = r - qr, ey = p[1] - qy;
-    const float d2 = er * er + ey * ey;
-    if (!(d2 < t * t)) return out;
-    out.inside = true;
+    // Outside the solid, within t of its closest point (qr, qy).
+    const float qr = std::min(r, R), qy = std::clamp(y, bottom, top);
+    const float er = r - qr, ey = y - qy;
     if (er == 0.0f) { // straight above or below a face: only y changes
         const float ny = ey > 0.0f ? 1.0f : -1.0f;
-        out.normal = {0.0f, ny, 0.0f};
-        out.point = {p[0], qy + ny * t, p[2]};
-        return out;
+        return {{x, qy + ny * t, z}, {0.0f, ny, 0.0f}};
     }
-    const float d = std::sqrt(d2);
+    const float d = std::sqrt(er * er + ey * ey);
     const float nr = er / d, ny = ey / d;
-    out.normal = {nr * ux, ny, nr * uz};
     const float new_r = qr + nr * t;
-    out.point = {col.centre[0] + ux * new_r, qy + ny * t, col.centre[2] + uz * new_r};
-    return out;
+    return {{col.centre[0] + ux * new_r, qy + ny * t, col.centre[2] + uz * new_r}, {nr * ux, ny, nr * uz}};
 }
 
-Contact project_ellipsoid(const Collider& col, const Vec3f& p) noexcept {
-    Contact out;
-    out.point = p;
+inline Projection project_ellipsoid(const Collider& col, float x, float y, float z) noexcept {
+    Vec3f q;
+    ellipsoid_level(col, x, y, z, &q);
     const auto& R = col.rotation;
-    const float wx = p[0] - col.centre[0], wy = p[1] - col.centre[1], wz = p[2] - col.centre[2];
-    // local = R^T world
-    const Vec3f q{R[0] * wx + R[3] * wy + R[6] * wz, R[1] * wx + R[4] * wy + R[7] * wz,
-                  R[2] * wx + R[5] * wy + R[8] * wz};
     const Vec3f A{col.size[0] + col.thickness, col.size[1] + col.thickness, col.size[2] + col.thickness};
-    const float f = (q[0] / A[0]) * (q[0] / A[0]) + (q[1] / A[1]) * (q[1] / A[1]) + (q[2] / A[2]) * (q[2] / A[2]);
-    if (!(f < 1.0f)) return out;
-    out.inside = true;
-    const Vec3f x = ellipsoid_closest_point(A, q);
-    Vec3f n{x[0] / (A[0] * A[0]), x[1] / (A[1] * A[1]), x[2] / (A[2] * A[2])};
+    const Vec3f e = ellipsoid_closest_point(A, q);
+    Vec3f n{e[0] / (A[0] * A[0]), e[1] / (A[1] * A[1]), e[2] / (A[2] * A[2])};
     const float len = std::sqrt(dot3(n, n));
     n = {n[0] / len, n[1] / len, n[2] / len};
-    out.normal = {R[0] * n[0] + R[1] * n[1] + R[2] * n[2], R[3] * n[0] + R[4] * n[1] + R[5] * n[2],
-                  R[6] * n[0] + R[7] * n[1] + R[8] * n[2]};
-    out.point = {col.centre[0] + R[0] * x[0] + R[1] * x[1] + R[2] * x[2],
-                 col.centre[1] + R[3] * x[0] + R[4] * x[1] + R[5] * x[2],
-                 col.centre[2] + R[6] * x[0] + R[7] * x[1] + R[8] * x[2]};
-    return out;
+    return {{col.centre[0] + R[0] * e[0] + R[1] * e[1] + R[2] * e[2],
+             col.centre[1] + R[3] * e[0] + R[4] * e[1] + R[5] * e[2],
+             col.centre[2] + R[6] * e[0] + R[7] * e[1] + R[8] * e[2]},
+            {R[0] * n[0] + R[1] * n[1] + R[2] * n[2], R[3] * n[0] + R[4] * n[1] + R[5] * n[2],
+             R[6] * n[0] + R[7] * n[1] + R[8] * n[2]}};
+}
+
+template <ColliderKind K> inline Projection project_kind(const Collider& col, float x, float y, float z) noexcept {
+    Projection pr;
+    if constexpr (K == ColliderKind::plane) pr = project_plane(col, x, y, z);
+    if constexpr (K == ColliderKind::sphere) pr = project_round(col.centre, col.size[0] + col.thickness, x, y, z);
+    if constexpr (K == ColliderKind::capsule) {
+        const float t = capsule_t(col, x, y, z);
+        const Vec3f c{col.centre[0] + t * (col.axis[0] - col.centre[0]), col.centre[1] + t * (col.axis[1] - col.centre[1]),
+                      col.centre[2] + t * (col.axis[2] - col.centre[2])};
+        pr = project_round(c, col.size[0] + col.thickness, x, y, z);
+    }
+    if constexpr (K == ColliderKind::disc) pr = project_disc(col, x, y, z);
+    if constexpr (K == ColliderKind::ellipsoid) pr = project_ellipsoid(col, x, y, z);
+    // Float rounding can leave the projected point a hair inside; step out along the normal until the inside test
+    // (the one the kernel uses) agrees, so a point is never found inside the same collider twice.
+    float step = 1e-7f; // m
+    for (int k = 0; k < 24 && inside_kind<K>(col, pr.point[0], pr.point[1], pr.point[2]); ++k, step *= 2.0f)
+        for (int c = 0; c < 3; ++c) pr.point[c] += step * pr.normal[c];
+    return pr;
 }
 
 // Removes the inward normal velocity and applies Coulomb friction to the tangential part.
@@ -182,28 +211,55 @@ inline void respond(const Vec3f& n, float mu, float& vx, float& vy, float& vz) n
     vz = tz;
 }
 
-// One collider over a range; the kind is a template parameter so each loop body is branch-free in the kind.
-template <ColliderKind K> inline Contact project_kind(const Collider& col, const Vec3f& p) noexcept {
-    if constexpr (K == ColliderKind::plane) return project_plane(col, p);
-    if constexpr (K == ColliderKind::sphere) return project_round(col.centre, col.size[0] + col.thickness, p);
-    if constexpr (K == ColliderKind::capsule) return project_round(capsule_closest(col, p), col.size[0] + col.thickness, p);
-    if constexpr (K == ColliderKind::disc) return project_disc(col, p);
-    if constexpr (K == ColliderKind::ellipsoid) return project_ellipsoid(col, p);
-}
+// ---------------------------------------------------------------------------------------------------------------------
+// Batch kernel: particles in chunks; per chunk and collider, a branch-free pre-pass flags the particles inside (a
+// plain loop the compiler can vectorise), then the flagged ones are projected one by one (contacts are few).
+
+constexpr std::size_t collide_chunk = 64;
+
+struct SoA {
+    float* __restrict x;
+    float* __restrict y;
+    float* __restrict z;
+    float* __restrict vx;
+    float* __restrict vy;
+    float* __restrict vz;
+    const float* __restrict inv_mass;
+};
 
 template <ColliderKind K>
-void collide_loop(const Collider& col, float* __restrict x, float* __restrict y, float* __restrict z,
-                  float* __restrict vx, float* __restrict vy, float* __restrict vz, const float* __restrict inv_mass,
-                  std::size_t begin, std::size_t end) noexcept {
-    for (std::size_t i = begin; i < end; ++i) {
-        if (inv_mass[i] == 0.0f) continue;
-        const Contact c = project_kind<K>(col, {x[i], y[i], z[i]});
-        if (!c.inside) continue;
-        x[i] = c.point[0];
-        y[i] = c.point[1];
-        z[i] = c.point[2];
-        respond(c.normal, col.friction, vx[i], vy[i], vz[i]);
+std::size_t collide_chunk_with(const Collider& col, const SoA& s, std::size_t begin, std::size_t end) noexcept {
+    std::uint8_t flag[collide_chunk];
+    const std::size_t n = end - begin;
+    const float* __restrict x = s.x + begin;
+    const float* __restrict y = s.y + begin;
+    const float* __restrict z = s.z + begin;
+    const float* __restrict w = s.inv_mass + begin;
+    for (std::size_t k = 0; k < n; ++k)
+        flag[k] = static_cast<std::uint8_t>(inside_kind<K>(col, x[k], y[k], z[k]) & (w[k] != 0.0f));
+    std::size_t contacts = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+        if (!flag[k]) continue;
+        const std::size_t i = begin + k;
+        const Projection pr = project_kind<K>(col, s.x[i], s.y[i], s.z[i]);
+        s.x[i] = pr.point[0];
+        s.y[i] = pr.point[1];
+        s.z[i] = pr.point[2];
+        respond(pr.normal, col.friction, s.vx[i], s.vy[i], s.vz[i]);
+        ++contacts;
     }
+    return contacts;
+}
+
+std::size_t collide_chunk_any(const Collider& col, const SoA& s, std::size_t begin, std::size_t end) noexcept {
+    switch (col.kind) {
+    case ColliderKind::plane: return collide_chunk_with<ColliderKind::plane>(col, s, begin, end);
+    case ColliderKind::sphere: return collide_chunk_with<ColliderKind::sphere>(col, s, begin, end);
+    case ColliderKind::disc: return collide_chunk_with<ColliderKind::disc>(col, s, begin, end);
+    case ColliderKind::capsule: return collide_chunk_with<ColliderKind::capsule>(col, s, begin, end);
+    case ColliderKind::ellipsoid: return collide_chunk_with<ColliderKind::ellipsoid>(col, s, begin, end);
+    }
+    return 0;
 }
 
 } // namespace
@@ -334,35 +390,40 @@ std::vector<Collider> default_body(ColliderSurface s) {
 // Projection
 
 Vec3f ellipsoid_closest_point(Vec3f semi_axes, Vec3f q_in) noexcept {
-    double a[3], q[3];
+    double a[3], a2[3], q[3];
     for (int k = 0; k < 3; ++k) {
         a[k] = semi_axes[k];
+        a2[k] = a[k] * a[k];
         q[k] = q_in[k];
         // On a symmetry plane the closest point is not unique and the root sits at the pole: nudge off it.
         if (std::abs(q[k]) < 1e-9 * a[k]) q[k] = q[k] < 0.0 ? -1e-9 * a[k] : 1e-9 * a[k];
     }
-    const double amin2 = std::min({a[0] * a[0], a[1] * a[1], a[2] * a[2]});
-    auto F = [&](double s) {
-        double sum = 0.0;
+    // F(s) = sum (a_i q_i / (a_i^2 + s))^2 - 1: decreasing and convex on (-min a_i^2, inf), +inf at the pole. Inside,
+    // F(0) < 0 and the root lies in (-min a_i^2, 0). Newton from s = 0 lands left of the root (convexity) and then
+    // climbs to it monotonically; a step leaving the bracket is replaced by bisection.
+    const double amin2 = std::min({a2[0], a2[1], a2[2]});
+    double lo = -amin2, hi = 0.0, s = 0.0;
+    for (int it = 0; it < 100; ++it) {
+        double f = -1.0, df = 0.0;
         for (int k = 0; k < 3; ++k) {
-            const double r = a[k] * q[k] / (a[k] * a[k] + s);
-            sum += r * r;
+            const double den = 1.0 / (a2[k] + s);
+            const double r = a[k] * q[k] * den;
+            f += r * r;
+            df -= 2.0 * r * r * den;
         }
-        return sum - 1.0;
-    };
-    // Inside: F(0) < 0 and F -> +inf at s -> -amin^2 (F decreases in s). Outside (not expected): F(0) >= 0, s = 0.
-    double lo = -amin2, hi = 0.0;
-    if (F(0.0) < 0.0)
-        for (int it = 0; it < 64; ++it) {
-            const double mid = 0.5 * (lo + hi);
-            if (mid <= lo || mid >= hi) break;
-            if (F(mid) > 0.0)
-                lo = mid;
-            else
-                hi = mid;
-        }
+        if (f > 0.0)
+            lo = s;
+        else
+            hi = s;
+        if (f == 0.0) break;
+        double next = s - f / df;
+        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+        const bool done = std::abs(next - s) <= 1e-14 * amin2;
+        s = next;
+        if (done) break;
+    }
     double x[3];
-    for (int k = 0; k < 3; ++k) x[k] = a[k] * a[k] * q[k] / (a[k] * a[k] + hi);
+    for (int k = 0; k < 3; ++k) x[k] = a2[k] * q[k] / (a2[k] + s);
     // Radial snap onto the surface, then out by a few float ulps until the float point is not inside.
     double g = 0.0;
     for (int k = 0; k < 3; ++k) g += (x[k] / a[k]) * (x[k] / a[k]);
@@ -379,41 +440,48 @@ Vec3f ellipsoid_closest_point(Vec3f semi_axes, Vec3f q_in) noexcept {
 }
 
 Contact project_point(const Collider& col, Vec3f p) noexcept {
+    Contact out{false, p, {}};
+    auto run = [&]<ColliderKind K>() {
+        if (!inside_kind<K>(col, p[0], p[1], p[2])) return;
+        const Projection pr = project_kind<K>(col, p[0], p[1], p[2]);
+        out = {true, pr.point, pr.normal};
+    };
     switch (col.kind) {
-    case ColliderKind::plane: return project_kind<ColliderKind::plane>(col, p);
-    case ColliderKind::sphere: return project_kind<ColliderKind::sphere>(col, p);
-    case ColliderKind::disc: return project_kind<ColliderKind::disc>(col, p);
-    case ColliderKind::capsule: return project_kind<ColliderKind::capsule>(col, p);
-    case ColliderKind::ellipsoid: return project_kind<ColliderKind::ellipsoid>(col, p);
+    case ColliderKind::plane: run.operator()<ColliderKind::plane>(); break;
+    case ColliderKind::sphere: run.operator()<ColliderKind::sphere>(); break;
+    case ColliderKind::disc: run.operator()<ColliderKind::disc>(); break;
+    case ColliderKind::capsule: run.operator()<ColliderKind::capsule>(); break;
+    case ColliderKind::ellipsoid: run.operator()<ColliderKind::ellipsoid>(); break;
     }
-    return Contact{false, p, {}};
+    return out;
 }
 
 bool is_inside(const Collider& col, Vec3f p, float slack) noexcept {
     Collider c = col;
     c.thickness = col.thickness - slack; // may go negative: a point on the surface is then outside
     switch (col.kind) {
-    case ColliderKind::ellipsoid: {
-        const Vec3f A{col.size[0] + c.thickness, col.size[1] + c.thickness, col.size[2] + c.thickness};
-        const auto& R = col.rotation;
-        const float wx = p[0] - col.centre[0], wy = p[1] - col.centre[1], wz = p[2] - col.centre[2];
-        const Vec3f q{R[0] * wx + R[3] * wy + R[6] * wz, R[1] * wx + R[4] * wy + R[7] * wz,
-                      R[2] * wx + R[5] * wy + R[8] * wz};
-        return (q[0] / A[0]) * (q[0] / A[0]) + (q[1] / A[1]) * (q[1] / A[1]) + (q[2] / A[2]) * (q[2] / A[2]) < 1.0f;
+    case ColliderKind::plane: return inside_kind<ColliderKind::plane>(c, p[0], p[1], p[2]);
+    case ColliderKind::sphere:
+        return std::hypot(p[0] - c.centre[0], p[1] - c.centre[1], p[2] - c.centre[2]) < c.size[0] + c.thickness;
+    case ColliderKind::capsule: {
+        const float t = capsule_t(c, p[0], p[1], p[2]);
+        return std::hypot(p[0] - (c.centre[0] + t * (c.axis[0] - c.centre[0])),
+                          p[1] - (c.centre[1] + t * (c.axis[1] - c.centre[1])),
+                          p[2] - (c.centre[2] + t * (c.axis[2] - c.centre[2]))) < c.size[0] + c.thickness;
     }
+    case ColliderKind::ellipsoid: return ellipsoid_level(c, p[0], p[1], p[2]) < 1.0f;
     case ColliderKind::disc: {
-        // Distance to the solid cylinder < thickness (or inside it).
+        // Signed distance to the solid cylinder (negative inside: minus the depth below the nearest face).
         const float R = col.size[0], top = col.centre[1], bottom = col.centre[1] - col.size[1];
         const float dx = p[0] - col.centre[0], dz = p[2] - col.centre[2];
         const float r = std::sqrt(dx * dx + dz * dz);
         const float er = std::max(r - R, 0.0f), ey = p[1] > top ? p[1] - top : (p[1] < bottom ? bottom - p[1] : 0.0f);
-        // Signed distance to the solid: negative inside (depth below the nearest face).
         const float sd = (er == 0.0f && ey == 0.0f) ? -std::min({top - p[1], R - r, p[1] - bottom})
                                                     : std::sqrt(er * er + ey * ey);
         return sd < c.thickness;
     }
-    default: return project_point(c, p).inside;
     }
+    return false;
 }
 
 // ---------------------------------------------------------------------------------------------------------------------
@@ -421,36 +489,22 @@ bool is_inside(const Collider& col, Vec3f p, float slack) noexcept {
 
 void collide_range(const Collider& col, float* x, float* y, float* z, float* vx, float* vy, float* vz,
                    const float* inv_mass, std::size_t begin, std::size_t end) noexcept {
-    switch (col.kind) {
-    case ColliderKind::plane: collide_loop<ColliderKind::plane>(col, x, y, z, vx, vy, vz, inv_mass, begin, end); break;
-    case ColliderKind::sphere: collide_loop<ColliderKind::sphere>(col, x, y, z, vx, vy, vz, inv_mass, begin, end); break;
-    case ColliderKind::disc: collide_loop<ColliderKind::disc>(col, x, y, z, vx, vy, vz, inv_mass, begin, end); break;
-    case ColliderKind::capsule:
-        collide_loop<ColliderKind::capsule>(col, x, y, z, vx, vy, vz, inv_mass, begin, end);
-        break;
-    case ColliderKind::ellipsoid:
-        collide_loop<ColliderKind::ellipsoid>(col, x, y, z, vx, vy, vz, inv_mass, begin, end);
-        break;
-    }
+    const SoA s{x, y, z, vx, vy, vz, inv_mass};
+    for (std::size_t c = begin; c < end; c += collide_chunk) collide_chunk_any(col, s, c, std::min(end, c + collide_chunk));
 }
 
 void collide_range(std::span<const Collider> colliders, float* x, float* y, float* z, float* vx, float* vy, float* vz,
                    const float* inv_mass, std::size_t begin, std::size_t end) noexcept {
+    // Per chunk: passes over the colliders in order until a pass finds no contact (at most 4). A particle's own
+    // sequence of projections is the same as if it were processed alone: further passes leave a clean particle alone.
     constexpr int max_passes = 4;
-    for (std::size_t i = begin; i < end; ++i) {
-        if (inv_mass[i] == 0.0f) continue;
+    const SoA s{x, y, z, vx, vy, vz, inv_mass};
+    for (std::size_t c = begin; c < end; c += collide_chunk) {
+        const std::size_t c_end = std::min(end, c + collide_chunk);
         for (int pass = 0; pass < max_passes; ++pass) {
-            bool any = false;
-            for (const Collider& col : colliders) {
-                const Contact c = project_point(col, {x[i], y[i], z[i]});
-                if (!c.inside) continue;
-                any = true;
-                x[i] = c.point[0];
-                y[i] = c.point[1];
-                z[i] = c.point[2];
-                respond(c.normal, col.friction, vx[i], vy[i], vz[i]);
-            }
-            if (!any) break;
+            std::size_t contacts = 0;
+            for (const Collider& col : colliders) contacts += collide_chunk_any(col, s, c, c_end);
+            if (contacts == 0) break;
         }
     }
 }

@@ -7,8 +7,13 @@
 // cylinder; grown by thickness it has rounded rims, which helps cloth drape over the edge). For an ellipsoid the
 // inflated surface is the ellipsoid with semi-axes a + t, b + t, c + t (exact along the axes, up to ~t^2 / a closer
 // to the true offset surface elsewhere), and the projection is that ellipsoid's closest point, found by bisection on
-// the Lagrange parameter (D. Eberly, "Distance from a point to an ellipse, an ellipsoid, or a hyperellipsoid"), then
-// snapped radially onto the surface, so the result is never inside (see ellipsoid_closest_point).
+// the Lagrange parameter (D. Eberly, "Distance from a point to an ellipse, an ellipsoid, or a hyperellipsoid"; here
+// safeguarded Newton), then snapped radially onto the surface (see ellipsoid_closest_point). Every projected point is
+// then stepped out along the normal by 0.1 um, doubling, until the kernel's own inside test agrees it is outside, so
+// float rounding never leaves it inside and a second pass does not find it again.
+//
+// Batch kernel: particles in chunks of 64; per chunk and collider a branch-free pre-pass flags the particles inside
+// (a plain loop over the SoA arrays), then only the flagged ones are projected.
 //
 // Velocity response (collide_range): for a point pushed out with normal n, the inward normal velocity v.n < 0 is
 // removed, and Coulomb friction takes mu |v.n| off the tangential speed (never reversing it); mu = 0 keeps the
@@ -95,15 +100,17 @@ struct Contact {
 Contact project_point(const Collider& collider, Vec3f p) noexcept;
 
 /// Closest point of the ellipsoid with semi-axes `a` (> 0, local frame, centred at 0) to a point `q` inside it:
-/// solves sum (a_i q_i / (a_i^2 + s))^2 = 1 for s in (-min a_i^2, 0] by 64 bisection steps in double (robust where
-/// Newton is not: near the medial axis the root approaches the pole), then scales the result radially onto the
+/// x_i = a_i^2 q_i / (a_i^2 + s) where s in (-min a_i^2, 0] solves sum (a_i q_i / (a_i^2 + s))^2 = 1, found in double
+/// by Newton's method kept inside a shrinking bracket (a step leaving it is replaced by bisection, which keeps it
+/// robust near the medial axis, where the root approaches the pole). The result is then scaled radially onto the
 /// surface so that sum (x_i / a_i)^2 >= 1 holds in float. Points on a symmetry plane are nudged off it by 1e-9 a_i
 /// (the closest point there is not unique). Exposed for the tests.
 Vec3f ellipsoid_closest_point(Vec3f semi_axes, Vec3f q) noexcept;
 
 /// The collide stage over particles [begin, end) of structure-of-arrays state: positions (m) and velocities (m/s)
 /// in place; particles with inv_mass 0 are skipped. One collider, or several in order (a body): with several,
-/// the pass over them repeats (up to 4 times) while a particle is still inside one of them.
+/// the pass over them repeats (up to 4 times) while a particle of the chunk was still inside one of them (overlapping
+/// colliders can push a point from one into another). Results per particle do not depend on begin/end or chunking.
 void collide_range(const Collider& collider, float* x, float* y, float* z, float* vx, float* vy, float* vz,
                    const float* inv_mass, std::size_t begin, std::size_t end) noexcept;
 void collide_range(std::span<const Collider> colliders, float* x, float* y, float* z, float* vx, float* vy,
