@@ -1,5 +1,6 @@
 // The `drape` executable: command-line front end.
 //   drape run ...   headless run of a scene with machine-readable figures (see run_command.hpp)
+//   drape view ...  the real-time viewer (see view_command.hpp); `drape` with no arguments opens it
 // Exit codes: 0 ok, 2 bad input (one line naming the flag and its allowed range), 3 simulation became non-finite.
 #include <cstdio>
 #include <iostream>
@@ -11,6 +12,7 @@
 #include "drape/errors.hpp"
 #include "drape/scene_hang.hpp"
 #include "run_command.hpp"
+#include "view_command.hpp"
 
 namespace {
 
@@ -35,7 +37,7 @@ template <class T> CLI::Validator in_range(T lo, T hi, const std::string& unit =
 
 int main(int argc, char** argv) {
     CLI::App app{"drape: a data-oriented, SIMD + multithreaded mass-spring cloth engine"};
-    app.require_subcommand(1);
+    app.require_subcommand(0, 1); // no subcommand: the viewer
     app.set_version_flag("--version", "drape 0.1.0");
 
     drape::app::RunOptions run;
@@ -86,6 +88,49 @@ int main(int argc, char** argv) {
     cmd->add_flag("--staged", run.staged, "Run each stage as its own pass instead of the fused pass");
     cmd->add_flag("--json", run.json, "Print exactly one JSON object on stdout");
 
+    drape::app::ViewOptions view;
+    CLI::App* view_cmd = app.add_subcommand("view", "Real-time viewer: drag the cloth, pin particles, edit fabric, "
+                                                    "physics and lighting in panels (the default with no arguments). "
+                                                    "Press F1 in the window for keys.");
+    view_cmd->add_option("--scene", view.scene, "Scene to show")->check(CLI::IsMember({"hang"}))->capture_default_str();
+    view_cmd->add_option("--size", view.size, "Particles per side N (N x N particles)")
+        ->check(in_range<std::uint32_t>(2, 2048))
+        ->capture_default_str();
+    view_cmd->add_option("--threads", view.threads, "Worker threads (default: all hardware threads)")
+        ->check(in_range<int>(1, 256));
+    view_cmd->add_option("--substeps", view.substeps,
+                         "Substeps per frame (default: automatic, 1/60 s simulated per frame within a cost cap)")
+        ->check(in_range<int>(1, 1000));
+    view_cmd->add_option("--width", view.width, "Window width in pixels")
+        ->check(in_range<int>(320, 7680))
+        ->capture_default_str();
+    view_cmd->add_option("--height", view.height, "Window height in pixels")
+        ->check(in_range<int>(240, 4320))
+        ->capture_default_str();
+    bool no_vsync = false;
+    view_cmd->add_flag("--no-vsync", no_vsync, "Do not wait for the display's refresh (measure the real frame rate)");
+    view_cmd->add_option("--frames", view.frames, "Draw this many frames, then exit (default: until the window closes)")
+        ->check(in_range<std::uint64_t>(1, 100'000'000));
+    view_cmd->add_option("--screenshot", view.screenshot, "Save the last frame as this PNG file")
+        ->check(CLI::Validator(
+            [](std::string& path) -> std::string {
+                if (path.size() < 5 || path.substr(path.size() - 4) != ".png")
+                    return "'" + path + "' must be a file name ending in .png";
+                return {};
+            },
+            "FILE.png"));
+    view_cmd->add_flag("--stats-json", view.stats_json,
+                       "At exit, print one JSON object: fps (median), frame_ms {sim, publish, draw}, particles, ...");
+    bool no_ui = false;
+    view_cmd->add_flag("--no-ui", no_ui, "Hide the panels and the stats overlay (Tab toggles them)");
+    view_cmd->add_flag("--full-mesh", view.full_mesh,
+                       "Draw every triangle (default: grids finer than 256 x 256 are drawn at a coarser level of detail)");
+    // Hidden automation hooks (documentation screenshots and tests).
+    view_cmd->add_flag("--panels-open", view.panels_open, "Expand every panel")->group("");
+    view_cmd->add_flag("--demo-grab", view.demo_grab, "Grab and drag the free corner half-way through --frames")
+        ->group("");
+    view_cmd->add_flag("--paused", view.start_paused, "Start paused")->group("");
+
     auto is_command = [&](const std::string& name) {
         for (const CLI::App* sub : app.get_subcommands({}))
             if (sub->check_name(name)) return true;
@@ -106,12 +151,22 @@ int main(int argc, char** argv) {
     } catch (const CLI::CallForVersion& e) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
-        std::fprintf(stderr, "drape: %s (see drape %s--help)\n", e.what(), cmd->parsed() ? "run " : "");
+        std::fprintf(stderr, "drape: %s (see drape %s--help)\n", e.what(),
+                     cmd->parsed() ? "run " : view_cmd->parsed() ? "view " : "");
         return 2;
     }
 
     try {
         if (cmd->parsed()) return drape::app::run_command(run);
+        // `drape view`, or `drape` alone: the viewer.
+        view.vsync = !no_vsync;
+        view.ui = !no_ui;
+#ifdef DRAPE_WITH_VIEWER
+        return drape::app::view_command(view);
+#else
+        std::fprintf(stderr, "drape: this build has no viewer (configure with -DDRAPE_BUILD_RENDER=ON)\n");
+        return 2;
+#endif
     } catch (const drape::InvalidInput& e) {
         std::fprintf(stderr, "drape: %s\n", e.what());
         return 2;

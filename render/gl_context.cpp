@@ -16,7 +16,7 @@ void on_glfw_error(int code, const char* text) { last_glfw_error = std::to_strin
 GLFWwindow* open_window(int width, int height, const std::string& title, bool visible) {
     glfwSetErrorCallback(on_glfw_error);
     if (!glfwInit())
-        throw std::runtime_error("cannot initialise GLFW (no display? run under xvfb-run -a): " + last_glfw_error);
+        throw DisplayError("cannot initialise GLFW (no display? run under xvfb-run -a): " + last_glfw_error);
     glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
     glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
     glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);

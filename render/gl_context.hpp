@@ -2,14 +2,21 @@
 // The viewer (app/) builds on this; core never includes it.
 #pragma once
 
+#include <stdexcept>
 #include <string>
 
 struct GLFWwindow;
 
 namespace drape::render {
 
-/// Opens a GLFW window with an OpenGL 4.5 core context and loads the GL functions. Throws std::runtime_error with
-/// a message naming what failed (no display, no 4.5 context).
+/// No display to open a window on (no X server / $DISPLAY). The viewer maps it to exit code 2 with an xvfb-run hint.
+class DisplayError : public std::runtime_error {
+  public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Opens a GLFW window with an OpenGL 4.5 core context and loads the GL functions. Throws DisplayError when GLFW
+/// cannot initialise (no display) and std::runtime_error naming what failed otherwise (no 4.5 context).
 GLFWwindow* open_window(int width, int height, const std::string& title, bool visible = true);
 
 /// "4.5 (Core Profile) Mesa ..." of the current context.

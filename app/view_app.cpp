@@ -1,0 +1,542 @@
+// The viewer's window, input and frame loop (see view_app.hpp).
+#include "view_app.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <iostream>
+
+#include <Eigen/LU>
+#include <glad/gl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <imgui.h>
+#include <imgui_impl_glfw.h>
+#include <imgui_impl_opengl3.h>
+#include <nlohmann/json.hpp>
+
+#include "gl_context.hpp"
+#include "screenshot.hpp"
+
+namespace drape::app {
+
+namespace {
+
+using clock_type = std::chrono::steady_clock;
+
+double ms_since(clock_type::time_point t) {
+    return std::chrono::duration<double, std::milli>(clock_type::now() - t).count();
+}
+
+Viewer* viewer_of(GLFWwindow* w) { return static_cast<Viewer*>(glfwGetWindowUserPointer(w)); }
+
+void mouse_button_cb(GLFWwindow* w, int button, int action, int mods) { viewer_of(w)->on_mouse_button(button, action, mods); }
+void cursor_cb(GLFWwindow* w, double x, double y) { viewer_of(w)->on_cursor(x, y); }
+void scroll_cb(GLFWwindow* w, double, double dy) { viewer_of(w)->on_scroll(dy); }
+void key_cb(GLFWwindow* w, int key, int, int action, int mods) { viewer_of(w)->on_key(key, action, mods); }
+
+bool ui_wants_mouse() { return ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureMouse; }
+bool ui_wants_keyboard() { return ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureKeyboard; }
+
+double median(std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    const std::size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+} // namespace
+
+Viewer::Viewer(const ViewOptions& options) : options_(options) {
+    show_ui_ = options.ui;
+    full_mesh_ = options.full_mesh;
+    window_ = render::open_window(options.width, options.height, "drape - cloth viewer", true);
+    glfwSwapInterval(options.vsync ? 1 : 0);
+    gl_renderer_ = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    gl_version_ = render::gl_version_string();
+
+    glfwSetWindowUserPointer(window_, this);
+    // Installed before ImGui's, which chains to them.
+    glfwSetMouseButtonCallback(window_, mouse_button_cb);
+    glfwSetCursorPosCallback(window_, cursor_cb);
+    glfwSetScrollCallback(window_, scroll_cb);
+    glfwSetKeyCallback(window_, key_cb);
+
+    IMGUI_CHECKVERSION();
+    ImGui::CreateContext();
+    ImGuiIO& io = ImGui::GetIO();
+    io.IniFilename = nullptr; // no imgui.ini in the user's directory
+    ImGui::StyleColorsDark();
+    ImGuiStyle& style = ImGui::GetStyle();
+    style.WindowRounding = 4.0f;
+    style.FrameRounding = 3.0f;
+    style.WindowBorderSize = 0.0f;
+    ImGui_ImplGlfw_InitForOpenGL(window_, true);
+    ImGui_ImplOpenGL3_Init("#version 450 core");
+    imgui_ready_ = true;
+
+    session_ = std::make_unique<ViewSession>(options.size, options.threads, options.substeps);
+    if (options.start_paused) session_->set_running(false);
+    sync_gpu();
+    reset_camera();
+    glfwGetCursorPos(window_, &cursor_x_, &cursor_y_);
+    window_start_ = clock_type::now();
+}
+
+Viewer::~Viewer() {
+    // GPU objects first, while the context lives.
+    renderer_.reset();
+    stage_.reset();
+    if (imgui_ready_) {
+        ImGui_ImplOpenGL3_Shutdown();
+        ImGui_ImplGlfw_Shutdown();
+        ImGui::DestroyContext();
+    }
+    render::close_window(window_);
+}
+
+float Viewer::aspect() const {
+    int w = 1, h = 1;
+    glfwGetFramebufferSize(window_, &w, &h);
+    return h > 0 ? float(w) / float(h) : 1.0f;
+}
+
+float Viewer::panel_width() const { return show_ui_ ? 348.0f : 0.0f; }
+
+Eigen::Matrix4f Viewer::view_projection() const {
+    // The scene is centred in the part of the window right of the panel column: the projection is shifted in x by
+    // that column's width (in NDC units) and its aspect is that of the free area. Picking unprojects through the
+    // same matrix, so it stays exact.
+    int w = 1, h = 1;
+    glfwGetWindowSize(window_, &w, &h);
+    const float panel = std::min(panel_width(), 0.5f * float(w));
+    const float free_aspect = float(std::max(w - static_cast<int>(panel), 1)) / float(std::max(h, 1));
+    Eigen::Matrix4f shift = Eigen::Matrix4f::Identity();
+    shift(0, 3) = panel / float(std::max(w, 1));
+    // Keep the horizontal scale of the free area: x_ndc spans the free width, i.e. (w - panel) / w of the window.
+    shift(0, 0) = float(std::max(w - static_cast<int>(panel), 1)) / float(std::max(w, 1));
+    return shift * camera_.projection(free_aspect) * camera_.view();
+}
+
+void Viewer::reset_camera() {
+    // Frame where scene "hang" spends its time: hanging from its pinned edge (z = -s/2) down to about y = -s, swinging
+    // a little towards +z. (It starts flat at y = 0 and falls within the first second.)
+    const float s = session_->cloth_size();
+    camera_.yaw = 0.62f;
+    camera_.pitch = 0.30f;
+    camera_.fov_y_deg = 40.0f;
+    int w = 1, h = 1;
+    glfwGetWindowSize(window_, &w, &h);
+    const float free_aspect = float(std::max(w - static_cast<int>(panel_width()), 1)) / float(std::max(h, 1));
+    camera_.frame(Eigen::Vector3f(-0.55f * s, -1.05f * s, -0.75f * s), Eigen::Vector3f(0.55f * s, 0.05f * s, 0.25f * s),
+                  free_aspect);
+}
+
+void Viewer::sync_gpu() {
+    if (session_->generation() != gpu_generation_ || full_mesh_ != gpu_full_mesh_) {
+        // A new cloth: new ring, index buffer and markers. Wait for the GPU to let go of the old buffers first.
+        glFinish();
+        renderer_.reset();
+        const Simulation& sim = session_->sim();
+        const std::uint32_t columns = sim.cloth().grid ? sim.cloth().grid->columns : 0;
+        const std::uint32_t rows = sim.cloth().grid ? sim.cloth().grid->rows : 0;
+        renderer_ = std::make_unique<render::ClothRenderer>(sim.cloth().triangles, sim.cloth().particle_count,
+                                                            session_->publisher().plane_floats(), columns, rows,
+                                                            full_mesh_);
+        gpu_full_mesh_ = full_mesh_;
+        const float s = session_->cloth_size();
+        stage_ = std::make_unique<render::Stage>(-1.25f * s, 0.0f, 0.0f, 2.5f * s, 0.1f * s);
+        gpu_generation_ = session_->generation();
+        gpu_markers_ = 0;
+        hover_ = shown_hover_ = shown_grab_ = no_particle;
+        if (drag_ == Drag::grab) drag_ = Drag::none;
+        ui_size_ = static_cast<int>(session_->size());
+        ui_node_mass_ = session_->fabric().node_mass_g;
+    }
+    const std::size_t grabbed = session_->sim().grabbed();
+    const std::size_t hover = show_pins_ ? hover_ : no_particle;
+    if (session_->markers_version() != gpu_markers_ || grabbed != shown_grab_ || hover != shown_hover_) {
+        static const std::vector<std::uint32_t> none;
+        renderer_->set_markers(show_pins_ ? session_->pinned() : none, grabbed, hover);
+        gpu_markers_ = session_->markers_version();
+        shown_grab_ = grabbed;
+        shown_hover_ = hover;
+    }
+}
+
+Ray Viewer::cursor_ray(double x, double y) const {
+    int w = 1, h = 1;
+    glfwGetWindowSize(window_, &w, &h);
+    const Eigen::Vector2f ndc = window_to_ndc(x, y, w, h);
+    return ray_from_ndc(view_projection().inverse(), ndc.x(), ndc.y());
+}
+
+PickHit Viewer::pick_at(double x, double y) const {
+    const Simulation& sim = session_->sim();
+    // Each particle is a sphere of 0.6 grid spacings: neighbouring spheres overlap, so the whole cloth is pickable.
+    return pick_particle(cursor_ray(x, y), sim.x(), sim.y(), sim.z(), 0.6f * session_->spacing());
+}
+
+void Viewer::start_grab(const PickHit& hit, double x, double y) {
+    const Simulation& sim = session_->sim();
+    const std::size_t i = hit.index;
+    const Eigen::Vector3f p(sim.x()[i], sim.y()[i], sim.z()[i]);
+    grab_depth_ = view_depth(p, camera_.eye(), camera_.forward());
+    session_->grab(i, {p.x(), p.y(), p.z()});
+    drag_ = Drag::grab;
+    cursor_x_ = x;
+    cursor_y_ = y;
+}
+
+void Viewer::on_mouse_button(int button, int action, int mods) {
+    double x = cursor_x_, y = cursor_y_;
+    if (action == GLFW_PRESS) {
+        if (ui_wants_mouse()) return;
+        if (button == GLFW_MOUSE_BUTTON_LEFT && !(mods & GLFW_MOD_SHIFT)) {
+            const PickHit hit = pick_at(x, y);
+            if (hit.hit() && (mods & GLFW_MOD_CONTROL)) {
+                session_->toggle_pin(hit.index); // Ctrl+click: pin / unpin
+                return;
+            }
+            if (hit.hit()) {
+                start_grab(hit, x, y);
+                return;
+            }
+            drag_ = Drag::orbit;
+        } else if (button == GLFW_MOUSE_BUTTON_LEFT || button == GLFW_MOUSE_BUTTON_RIGHT ||
+                   button == GLFW_MOUSE_BUTTON_MIDDLE) {
+            drag_ = Drag::pan;
+        }
+    } else if (action == GLFW_RELEASE) {
+        if (drag_ == Drag::grab && button == GLFW_MOUSE_BUTTON_LEFT) session_->release_grab();
+        drag_ = Drag::none;
+    }
+}
+
+void Viewer::on_cursor(double x, double y) {
+    const double dx = x - cursor_x_, dy = y - cursor_y_;
+    cursor_x_ = x;
+    cursor_y_ = y;
+    cursor_moved_ = true;
+    int w = 1, h = 1;
+    glfwGetWindowSize(window_, &w, &h);
+    switch (drag_) {
+    case Drag::orbit:
+        camera_.orbit(float(-dx) * 0.006f, float(dy) * 0.006f);
+        break;
+    case Drag::pan:
+        camera_.pan(float(-dx) / float(std::max(h, 1)), float(dy) / float(std::max(h, 1)));
+        break;
+    case Drag::grab:
+        if (session_->sim().grabbed() == SIZE_MAX) {
+            drag_ = Drag::none; // pinned with P: the mouse is free again
+        } else {
+            const Eigen::Vector3f t = point_at_depth(cursor_ray(x, y), camera_.eye(), camera_.forward(), grab_depth_);
+            session_->move_grab({t.x(), t.y(), t.z()});
+        }
+        break;
+    case Drag::none:
+        break;
+    }
+}
+
+void Viewer::on_scroll(double dy) {
+    if (ui_wants_mouse()) return;
+    camera_.zoom(std::pow(0.88f, float(dy)));
+}
+
+void Viewer::on_key(int key, int action, int mods) {
+    if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
+    if (key == GLFW_KEY_F1 && action == GLFW_PRESS) {
+        show_help_ = !show_help_;
+        return;
+    }
+    if (ui_wants_keyboard()) return;
+    if (action == GLFW_REPEAT && key != GLFW_KEY_N) return;
+    switch (key) {
+    case GLFW_KEY_SPACE:
+        session_->set_running(!session_->running());
+        break;
+    case GLFW_KEY_N:
+        session_->step_once();
+        break;
+    case GLFW_KEY_BACKSPACE:
+        session_->reset();
+        break;
+    case GLFW_KEY_R:
+    case GLFW_KEY_HOME:
+        reset_camera();
+        break;
+    case GLFW_KEY_P:
+        if (session_->sim().grabbed() != SIZE_MAX) {
+            session_->pin_grabbed();
+            drag_ = Drag::none;
+        } else {
+            const PickHit hit = pick_at(cursor_x_, cursor_y_);
+            if (hit.hit()) session_->toggle_pin(hit.index);
+        }
+        break;
+    case GLFW_KEY_TAB:
+        show_ui_ = !show_ui_;
+        break;
+    case GLFW_KEY_G:
+        show_ground_ = !show_ground_;
+        break;
+    case GLFW_KEY_ESCAPE:
+        if (show_help_)
+            show_help_ = false;
+        else if (drag_ == Drag::grab) {
+            session_->release_grab();
+            drag_ = Drag::none;
+        }
+        break;
+    case GLFW_KEY_F12: {
+        char name[64];
+        std::snprintf(name, sizeof name, "drape_%lld.png", static_cast<long long>(std::time(nullptr)));
+        pending_screenshot_ = name;
+        break;
+    }
+    case GLFW_KEY_Q:
+        if (mods & GLFW_MOD_CONTROL) glfwSetWindowShouldClose(window_, GLFW_TRUE);
+        break;
+    default:
+        break;
+    }
+}
+
+void Viewer::frame_input(double wall_dt) {
+    // Held keys: orbit with the arrows, zoom with W/S, pan with A/D (sideways) and Q/E (down/up).
+    if (ui_wants_keyboard()) return;
+    const float step = static_cast<float>(std::min(wall_dt, 0.1));
+    auto down = [&](int key) { return glfwGetKey(window_, key) == GLFW_PRESS; };
+    if (glfwGetKey(window_, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS) return;
+    const float orbit = 1.6f * step, pan = 0.5f * step, zoom = std::pow(0.35f, step);
+    if (down(GLFW_KEY_LEFT)) camera_.orbit(orbit, 0.0f);
+    if (down(GLFW_KEY_RIGHT)) camera_.orbit(-orbit, 0.0f);
+    if (down(GLFW_KEY_UP)) camera_.orbit(0.0f, orbit);
+    if (down(GLFW_KEY_DOWN)) camera_.orbit(0.0f, -orbit);
+    if (down(GLFW_KEY_W)) camera_.zoom(zoom);
+    if (down(GLFW_KEY_S)) camera_.zoom(1.0f / zoom);
+    if (down(GLFW_KEY_A)) camera_.pan(-pan, 0.0f);
+    if (down(GLFW_KEY_D)) camera_.pan(pan, 0.0f);
+    if (down(GLFW_KEY_Q)) camera_.pan(0.0f, -pan);
+    if (down(GLFW_KEY_E)) camera_.pan(0.0f, pan);
+}
+
+void Viewer::update_hover() {
+    // Hover marker: what a click would grab. Picking scans every particle, so it runs only when the cursor moved.
+    if (!cursor_moved_ || drag_ != Drag::none) return;
+    cursor_moved_ = false;
+    if (ui_wants_mouse()) {
+        hover_ = no_particle;
+        return;
+    }
+    hover_ = pick_at(cursor_x_, cursor_y_).index;
+}
+
+void Viewer::run_demo_script() {
+    // --demo-grab: half-way through --frames, press on the free corner (N-1, N-1) through the real picking path,
+    // drag it up and towards the viewer over 60 frames, and hold it there until the end.
+    if (!options_.demo_grab || options_.frames == 0) return;
+    const std::uint64_t grab_frame = options_.frames / 2, drag_frames = 60;
+    const std::uint64_t f = frame_index_;
+    if (f < grab_frame) return;
+    int w = 1, h = 1;
+    glfwGetWindowSize(window_, &w, &h);
+    static double start_x = 0.0, start_y = 0.0;
+    if (f == grab_frame) {
+        const Simulation& sim = session_->sim();
+        const std::size_t n = session_->size();
+        const std::size_t corner = grid_index(static_cast<std::uint32_t>(n), static_cast<std::uint32_t>(n - 1),
+                                              static_cast<std::uint32_t>(n - 1));
+        const Eigen::Vector4f clip =
+            view_projection() * Eigen::Vector4f(sim.x()[corner], sim.y()[corner], sim.z()[corner], 1.0f);
+        start_x = (clip.x() / clip.w() + 1.0) * 0.5 * w;
+        start_y = (1.0 - clip.y() / clip.w()) * 0.5 * h;
+        on_cursor(start_x, start_y);
+        drag_ = Drag::none;
+        const PickHit hit = pick_at(start_x, start_y);
+        if (hit.hit()) start_grab(hit, start_x, start_y);
+        return;
+    }
+    const double t = std::min(1.0, double(f - grab_frame) / double(drag_frames));
+    const double s = t * t * (3.0 - 2.0 * t); // smooth start and stop
+    on_cursor(start_x + s * 0.16 * w, start_y - s * 0.30 * h);
+}
+
+void Viewer::draw_scene() {
+    int fw = 1, fh = 1;
+    glfwGetFramebufferSize(window_, &fw, &fh);
+    glViewport(0, 0, fw, fh);
+    const Eigen::Matrix4f vp = view_projection();
+    stage_->draw_background();
+    glEnable(GL_DEPTH_TEST);
+    renderer_->draw_cloth(vp, camera_.eye(), shading_);
+    if (show_ground_) stage_->draw_ground(vp, camera_.eye());
+    int ww = 1, wh = 1;
+    glfwGetWindowSize(window_, &ww, &wh);
+    renderer_->draw_markers(vp, float(fw) / float(std::max(ww, 1)));
+    renderer_->end_frame(); // fence: the GPU is done with this region once these draws complete
+}
+
+void Viewer::save_screenshot(const std::string& path) {
+    int fw = 1, fh = 1;
+    glfwGetFramebufferSize(window_, &fw, &fh);
+    render::save_screenshot_png(path, fw, fh);
+    std::fprintf(stderr, "drape view: saved %s (%d x %d)\n", path.c_str(), fw, fh);
+}
+
+int Viewer::run() {
+    auto last_swap = clock_type::now();
+    const std::string final_screenshot = options_.screenshot;
+    while (!glfwWindowShouldClose(window_)) {
+        const auto frame_start = clock_type::now();
+        glfwPollEvents();
+        run_demo_script();
+        frame_input(last_.frame > 0.0 ? last_.frame * 1e-3 : 1.0 / 60.0);
+
+        ImGui_ImplOpenGL3_NewFrame();
+        ImGui_ImplGlfw_NewFrame();
+        ImGui::NewFrame();
+        build_ui(); // panel changes apply to the session right here, within this frame
+
+        FrameTimes t;
+        // 1. Simulate.
+        auto t0 = clock_type::now();
+        last_substeps_ = session_->advance();
+        t.sim = ms_since(t0);
+        if (!session_->error().empty()) had_error_ = true;
+        sync_gpu();
+        update_hover();
+        sync_gpu();
+
+        // 2. Publish: positions + normals straight into the mapped region.
+        std::span<float> region = renderer_->begin_frame(&t.wait);
+        t0 = clock_type::now();
+        const Simulation& sim = session_->sim();
+        last_publish_ = session_->publisher().publish(sim.x(), sim.y(), sim.z(), region);
+        t.publish = ms_since(t0);
+        if (!last_publish_.finite) {
+            // Cannot happen after a finite step (the core checks); never draw garbage if it does.
+            session_->set_running(false);
+            session_->post(MessageLevel::error, "non-finite vertex data; drawing paused - press Backspace to reset");
+            had_error_ = true;
+        }
+
+        // 3. Draw.
+        t0 = clock_type::now();
+        if (last_publish_.finite) {
+            draw_scene();
+        } else {
+            renderer_->end_frame();
+            stage_->draw_background();
+        }
+        ImGui::Render();
+        ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+        const bool last_frame = options_.frames > 0 && frame_index_ + 1 >= options_.frames;
+        if (!pending_screenshot_.empty()) {
+            save_screenshot(pending_screenshot_);
+            pending_screenshot_.clear();
+        }
+        if (last_frame && !final_screenshot.empty()) save_screenshot(final_screenshot);
+        const auto swap_start = clock_type::now();
+        glfwSwapBuffers(window_);
+        const auto now = clock_type::now();
+        t.swap = std::chrono::duration<double, std::milli>(now - swap_start).count();
+        t.draw = std::chrono::duration<double, std::milli>(now - t0).count() + t.wait;
+        t.frame = std::chrono::duration<double, std::milli>(now - last_swap).count();
+        (void)frame_start;
+        last_swap = now;
+        last_ = t;
+        if (samples_.size() < 1'000'000) samples_.push_back(t);
+
+        // Overlay figures: averages over ~0.5 s.
+        window_sum_.sim += t.sim;
+        window_sum_.publish += t.publish;
+        window_sum_.draw += t.draw;
+        window_sum_.wait += t.wait;
+        window_sum_.swap += t.swap;
+        window_sum_.frame += t.frame;
+        ++window_frames_;
+        const double window_ms = ms_since(window_start_);
+        if (window_ms >= 500.0 || frame_index_ < 2) {
+            const double n = window_frames_;
+            shown_.sim = window_sum_.sim / n;
+            shown_.publish = window_sum_.publish / n;
+            shown_.draw = window_sum_.draw / n;
+            shown_.wait = window_sum_.wait / n;
+            shown_.swap = window_sum_.swap / n;
+            shown_.frame = window_sum_.frame / n;
+            shown_fps_ = 1000.0 * n / std::max(window_ms, 1e-3);
+            window_sum_ = {};
+            window_frames_ = 0;
+            window_start_ = clock_type::now();
+        }
+        ++frame_index_;
+        if (last_frame) break;
+    }
+    if (options_.frames == 0 && !final_screenshot.empty()) {
+        // Interactive run with --screenshot: the last frame drawn is still in the front buffer; redraw it once.
+        glfwPollEvents();
+        ImGui_ImplOpenGL3_NewFrame();
+        ImGui_ImplGlfw_NewFrame();
+        ImGui::NewFrame();
+        build_ui();
+        std::span<float> region = renderer_->begin_frame();
+        const Simulation& sim = session_->sim();
+        session_->publisher().publish(sim.x(), sim.y(), sim.z(), region);
+        draw_scene();
+        ImGui::Render();
+        ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+        save_screenshot(final_screenshot);
+    }
+    if (options_.stats_json) print_stats_json();
+    return had_error_ ? 3 : 0;
+}
+
+void Viewer::print_stats_json() const {
+    // Median over the frames after the first few (shader compilation, first touches of the buffers).
+    const std::size_t skip = std::min<std::size_t>(10, samples_.size() / 5);
+    std::vector<double> frame, sim, publish, draw, wait, swap;
+    for (std::size_t i = skip; i < samples_.size(); ++i) {
+        frame.push_back(samples_[i].frame);
+        sim.push_back(samples_[i].sim);
+        publish.push_back(samples_[i].publish);
+        draw.push_back(samples_[i].draw);
+        wait.push_back(samples_[i].wait);
+        swap.push_back(samples_[i].swap);
+    }
+    const double frame_ms = median(frame);
+    const Simulation& s = session_->sim();
+    nlohmann::ordered_json j;
+    j["fps"] = frame_ms > 0.0 ? 1000.0 / frame_ms : 0.0;
+    j["frame_ms"] = {{"sim", median(sim)}, {"publish", median(publish)}, {"draw", median(draw)},
+                     {"fence_wait", median(wait)}, {"swap", median(swap)}, {"total", frame_ms}};
+    j["particles"] = s.cloth().particle_count;
+    j["springs"] = s.cloth().spring_count();
+    j["substeps_per_frame"] = session_->substeps();
+    j["threads"] = session_->threads();
+    j["scene"] = options_.scene;
+    j["n"] = session_->size();
+    j["frames"] = samples_.size();
+    j["frames_measured"] = frame.size();
+    j["dt"] = s.params().dt;
+    j["sim_seconds"] = s.time();
+    j["max_strain"] = last_publish_.max_structural_strain;
+    j["finite"] = last_publish_.finite && session_->error().empty();
+    j["publish_path"] = session_->publisher().grid_path() ? "grid-simd" : "general";
+    j["triangles_drawn"] = renderer_->triangle_count();
+    j["triangles"] = s.cloth().triangles.size() / 3;
+    j["lod_stride"] = renderer_->lod_stride();
+    j["vsync"] = options_.vsync;
+    int fw = 0, fh = 0;
+    glfwGetFramebufferSize(window_, &fw, &fh);
+    j["framebuffer"] = {fw, fh};
+    j["gl_renderer"] = gl_renderer_;
+    j["gl_version"] = gl_version_;
+    if (!session_->error().empty()) j["error"] = session_->error();
+    std::cout << j.dump() << std::endl;
+}
+
+} // namespace drape::app

@@ -1,0 +1,128 @@
+// The viewer: a GLFW window with an OpenGL 4.5 core context, the frame loop, mouse and keyboard, and the Dear ImGui
+// panels (view_ui.cpp). One frame:
+//
+//   poll input -> panels (changes apply now) -> simulate `substeps` substeps (oneTBB, all threads)
+//   -> wait for the next ring region's fence -> output stage writes positions + normals into it (oneTBB + SIMD)
+//   -> draw background, ground, cloth, markers, panels -> fence the region -> swap
+//
+// Timings of the three parts (sim, publish, draw; the fence wait counts as draw) feed the overlay and --stats-json.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "camera.hpp"
+#include "cloth_renderer.hpp"
+#include "drape/picking.hpp"
+#include "stage.hpp"
+#include "view_command.hpp"
+#include "view_session.hpp"
+
+struct GLFWwindow;
+
+namespace drape::app {
+
+/// Per-frame timings, ms.
+struct FrameTimes {
+    double sim = 0.0;
+    double publish = 0.0;
+    double draw = 0.0;  ///< draw calls + panels + swap + fence wait
+    double wait = 0.0;  ///< fence wait alone (part of draw)
+    double swap = 0.0;  ///< glfwSwapBuffers alone (part of draw; llvmpipe rasterises and presents here)
+    double frame = 0.0; ///< swap to swap
+};
+
+class Viewer {
+  public:
+    /// Opens the window (throws render::DisplayError without a display) and builds the scene.
+    explicit Viewer(const ViewOptions& options);
+    ~Viewer();
+    Viewer(const Viewer&) = delete;
+    Viewer& operator=(const Viewer&) = delete;
+
+    /// Runs until the window closes or options.frames frames are drawn; returns the exit code.
+    int run();
+
+    // GLFW callbacks (forwarded from static trampolines; also driven by the demo script).
+    void on_mouse_button(int button, int action, int mods);
+    void on_cursor(double x, double y);
+    void on_scroll(double dy);
+    void on_key(int key, int action, int mods);
+
+  private:
+    void frame_input(double wall_dt);
+    void build_ui();
+    void ui_panels();
+    void ui_overlay();
+    void ui_help();
+    void ui_messages();
+    void sync_gpu();
+    void draw_scene();
+    void reset_camera();
+    void run_demo_script();
+    void print_stats_json() const;
+    Ray cursor_ray(double x, double y) const;
+    PickHit pick_at(double x, double y) const;
+    Eigen::Matrix4f view_projection() const;
+    float aspect() const;
+    /// Width of the panel column, in window units (0 when the panels are hidden).
+    float panel_width() const;
+    void update_hover();
+    void start_grab(const PickHit& hit, double x, double y);
+    void save_screenshot(const std::string& path);
+
+    ViewOptions options_;
+    GLFWwindow* window_ = nullptr;
+    bool imgui_ready_ = false;
+    std::unique_ptr<ViewSession> session_;
+    std::unique_ptr<render::ClothRenderer> renderer_;
+    std::unique_ptr<render::Stage> stage_;
+    std::uint64_t gpu_generation_ = 0;
+    std::uint64_t gpu_markers_ = 0;
+    render::OrbitCamera camera_;
+    render::Shading shading_;
+    std::string gl_renderer_;
+    std::string gl_version_;
+
+    // Input state.
+    enum class Drag { none, orbit, pan, grab };
+    Drag drag_ = Drag::none;
+    double cursor_x_ = 0.0, cursor_y_ = 0.0;
+    bool cursor_moved_ = false;
+    float grab_depth_ = 0.0f;
+    std::size_t hover_ = no_particle;
+    std::size_t shown_hover_ = no_particle;
+    std::size_t shown_grab_ = no_particle;
+
+    // UI state.
+    bool show_ui_ = true;
+    bool show_help_ = false;
+    bool show_ground_ = true;
+    bool show_pins_ = true;
+    bool full_mesh_ = false;
+    bool gpu_full_mesh_ = false;
+    int ui_size_ = 64;
+    float ui_node_mass_ = 0.0f;
+
+    // Stats.
+    std::uint64_t frame_index_ = 0;
+    FrameTimes last_;
+    FrameTimes shown_;       ///< averaged over ~0.5 s for the overlay
+    double shown_fps_ = 0.0;
+    FrameTimes window_sum_;
+    int window_frames_ = 0;
+    std::chrono::steady_clock::time_point window_start_;
+    std::vector<FrameTimes> samples_;
+    std::size_t last_substeps_ = 0;
+    PublishStats last_publish_;
+    bool had_error_ = false;
+    std::string pending_screenshot_;
+};
+
+} // namespace drape::app

@@ -1,0 +1,236 @@
+#include "cloth_renderer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <vector>
+
+namespace drape::render {
+
+namespace {
+
+const char* const cloth_vs = R"(#version 450 core
+layout(location = 0) in float px;
+layout(location = 1) in float py;
+layout(location = 2) in float pz;
+layout(location = 3) in float nx;
+layout(location = 4) in float ny;
+layout(location = 5) in float nz;
+uniform mat4 u_view_projection;
+uniform int u_base_vertex;  // gl_VertexID includes the base vertex
+uniform int u_columns;      // > 0: grid cloth, index = row * columns + column
+out vec3 v_position;
+out vec3 v_normal;
+out vec2 v_grid;
+void main() {
+    v_position = vec3(px, py, pz);
+    v_normal = vec3(nx, ny, nz);
+    int k = gl_VertexID - u_base_vertex;
+    v_grid = u_columns > 0 ? vec2(k % u_columns, k / u_columns) / float(max(u_columns - 1, 1)) : vec2(0.0);
+    gl_Position = u_view_projection * vec4(v_position, 1.0);
+}
+)";
+
+const char* const cloth_fs = R"(#version 450 core
+in vec3 v_position;
+in vec3 v_normal;
+in vec2 v_grid;
+uniform vec3 u_eye;
+uniform vec3 u_light_position;
+uniform float u_light_intensity;
+uniform vec3 u_front;       // linear RGB
+uniform vec3 u_back;        // linear RGB
+uniform float u_ambient;
+uniform float u_diffuse;
+uniform float u_specular;
+uniform float u_shininess;
+uniform float u_checker;    // 0 = off, else the darkening of every other square
+out vec4 out_colour;
+void main() {
+    vec3 n = normalize(v_normal);
+    vec3 base = u_front;
+    if (!gl_FrontFacing) {  // two-sided lighting: the back face is lit with the flipped normal
+        n = -n;
+        base = u_back;
+    }
+    if (u_checker > 0.0) {
+        vec2 cell = floor(v_grid * 16.0 - 1e-4);
+        base *= 1.0 - u_checker * mod(cell.x + cell.y, 2.0);
+    }
+    vec3 l = normalize(u_light_position - v_position);
+    vec3 v = normalize(u_eye - v_position);
+    vec3 h = normalize(l + v);
+    float ndl = max(dot(n, l), 0.0);
+    float spec = ndl > 0.0 ? pow(max(dot(n, h), 0.0), u_shininess) : 0.0;
+    vec3 c = u_ambient * base + u_light_intensity * (u_diffuse * ndl * base + vec3(u_specular * spec));
+    out_colour = vec4(pow(clamp(c, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
+}
+)";
+
+const char* const marker_vs = R"(#version 450 core
+layout(location = 0) in float px;
+layout(location = 1) in float py;
+layout(location = 2) in float pz;
+uniform mat4 u_view_projection;
+uniform float u_size;
+void main() {
+    gl_Position = u_view_projection * vec4(px, py, pz, 1.0);
+    gl_Position.z -= 0.002 * gl_Position.w;  // drawn just in front of the cloth it sits on
+    gl_PointSize = u_size;
+}
+)";
+
+const char* const marker_fs = R"(#version 450 core
+uniform vec3 u_colour;
+out vec4 out_colour;
+void main() {
+    vec2 d = gl_PointCoord * 2.0 - 1.0;
+    float r = dot(d, d);
+    if (r > 1.0) discard;
+    out_colour = vec4(r > 0.55 ? vec3(0.05) : u_colour, 1.0);  // dark rim, bright centre
+}
+)";
+
+/// Index buffer over every `stride`-th row and column of a columns x rows grid (last ones included), with the same
+/// triangulation as scene "hang" (cells split by the (i+1, j)-(i, j+1) diagonal, counter-clockwise from +normal).
+std::vector<std::uint32_t> lod_triangles(std::uint32_t columns, std::uint32_t rows, std::uint32_t stride) {
+    auto samples = [stride](std::uint32_t count) {
+        std::vector<std::uint32_t> v;
+        for (std::uint32_t i = 0; i + 1 < count; i += stride) v.push_back(i);
+        v.push_back(count - 1);
+        return v;
+    };
+    const std::vector<std::uint32_t> cs = samples(columns), rs = samples(rows);
+    std::vector<std::uint32_t> t;
+    t.reserve(6 * (cs.size() - 1) * (rs.size() - 1));
+    for (std::size_t j = 0; j + 1 < rs.size(); ++j)
+        for (std::size_t i = 0; i + 1 < cs.size(); ++i) {
+            const std::uint32_t a = rs[j] * columns + cs[i], b = rs[j] * columns + cs[i + 1],
+                                c = rs[j + 1] * columns + cs[i], d = rs[j + 1] * columns + cs[i + 1];
+            t.insert(t.end(), {a, c, b, b, c, d});
+        }
+    return t;
+}
+
+Eigen::Vector3f to_linear(const Eigen::Vector3f& srgb) {
+    return {std::pow(srgb.x(), 2.2f), std::pow(srgb.y(), 2.2f), std::pow(srgb.z(), 2.2f)};
+}
+
+} // namespace
+
+ClothRenderer::ClothRenderer(std::span<const std::uint32_t> triangles, std::size_t particle_count,
+                             std::size_t plane_floats, std::uint32_t grid_columns, std::uint32_t grid_rows,
+                             bool full_detail)
+    : particle_count_(particle_count), plane_floats_(plane_floats), grid_columns_(grid_columns),
+      ring_(6 * plane_floats), cloth_program_(cloth_vs, cloth_fs, "cloth"),
+      marker_program_(marker_vs, marker_fs, "marker") {
+    std::vector<std::uint32_t> coarse;
+    const std::uint32_t side = std::max(grid_columns, grid_rows);
+    if (!full_detail && grid_columns > 1 && grid_rows > 1 && side > lod_max_side &&
+        std::size_t{grid_columns} * grid_rows == particle_count) {
+        lod_stride_ = (side - 1 + lod_max_side - 2) / (lod_max_side - 1);
+        coarse = lod_triangles(grid_columns, grid_rows, lod_stride_);
+        triangles = coarse;
+    }
+    if (triangles.size() > static_cast<std::size_t>(INT32_MAX))
+        throw std::runtime_error("too many triangle indices for one draw call");
+    index_count_ = static_cast<GLsizei>(triangles.size());
+    // Static index buffer: written once here, never again.
+    glCreateBuffers(1, &index_buffer_);
+    glNamedBufferStorage(index_buffer_, static_cast<GLsizeiptr>(std::max<std::size_t>(1, triangles.size()) * 4),
+                         triangles.empty() ? nullptr : triangles.data(), 0);
+    glCreateBuffers(1, &marker_buffer_);
+    glNamedBufferData(marker_buffer_, 64, nullptr, GL_DYNAMIC_DRAW);
+
+    glCreateVertexArrays(1, &vao_);
+    for (GLuint p = 0; p < 6; ++p) {
+        glEnableVertexArrayAttrib(vao_, p);
+        glVertexArrayAttribFormat(vao_, p, 1, GL_FLOAT, GL_FALSE, 0);
+        glVertexArrayAttribBinding(vao_, p, p);
+        glVertexArrayVertexBuffer(vao_, p, ring_.buffer(),
+                                  static_cast<GLintptr>(p * plane_floats_ * sizeof(float)), sizeof(float));
+    }
+    glVertexArrayElementBuffer(vao_, index_buffer_);
+}
+
+ClothRenderer::~ClothRenderer() {
+    if (vao_) glDeleteVertexArrays(1, &vao_);
+    if (index_buffer_) glDeleteBuffers(1, &index_buffer_);
+    if (marker_buffer_) glDeleteBuffers(1, &marker_buffer_);
+}
+
+std::span<float> ClothRenderer::begin_frame(double* out_wait_ms) {
+    frame_open_ = true;
+    return ring_.acquire(region_, out_wait_ms);
+}
+
+void ClothRenderer::draw_cloth(const Eigen::Matrix4f& view_projection, const Eigen::Vector3f& eye,
+                               const Shading& s) {
+    const GLuint p = cloth_program_.id();
+    glUseProgram(p);
+    glUniformMatrix4fv(cloth_program_.uniform("u_view_projection"), 1, GL_FALSE, view_projection.data());
+    glUniform1i(cloth_program_.uniform("u_base_vertex"), base_vertex());
+    glUniform1i(cloth_program_.uniform("u_columns"), static_cast<GLint>(grid_columns_));
+    glUniform3fv(cloth_program_.uniform("u_eye"), 1, eye.data());
+    glUniform3fv(cloth_program_.uniform("u_light_position"), 1, s.light_position.data());
+    glUniform1f(cloth_program_.uniform("u_light_intensity"), s.light_intensity);
+    const Eigen::Vector3f front = to_linear(s.front_colour);
+    const Eigen::Vector3f back = s.back_colour_enabled ? to_linear(s.back_colour) : front;
+    glUniform3fv(cloth_program_.uniform("u_front"), 1, front.data());
+    glUniform3fv(cloth_program_.uniform("u_back"), 1, back.data());
+    glUniform1f(cloth_program_.uniform("u_ambient"), s.ambient);
+    glUniform1f(cloth_program_.uniform("u_diffuse"), s.diffuse);
+    glUniform1f(cloth_program_.uniform("u_specular"), s.specular);
+    glUniform1f(cloth_program_.uniform("u_shininess"), s.shininess);
+    glUniform1f(cloth_program_.uniform("u_checker"), (s.checker && grid_columns_ > 1) ? 0.12f : 0.0f);
+    glBindVertexArray(vao_);
+    glVertexArrayElementBuffer(vao_, index_buffer_);
+    glDisable(GL_CULL_FACE);
+    glDrawElementsBaseVertex(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr, base_vertex());
+}
+
+void ClothRenderer::set_markers(std::span<const std::uint32_t> pinned, std::size_t highlight, std::size_t hover) {
+    std::vector<std::uint32_t> list(pinned.begin(), pinned.end());
+    pinned_count_ = static_cast<GLsizei>(list.size());
+    highlight_count_ = highlight < particle_count_ ? 1 : 0;
+    hover_count_ = hover < particle_count_ && hover != highlight ? 1 : 0;
+    if (highlight_count_) list.push_back(static_cast<std::uint32_t>(highlight));
+    if (hover_count_) list.push_back(static_cast<std::uint32_t>(hover));
+    // Changes only when the user pins, grabs or hovers: a small upload then, never per frame.
+    glNamedBufferData(marker_buffer_, static_cast<GLsizeiptr>(std::max<std::size_t>(1, list.size()) * 4),
+                      list.empty() ? nullptr : list.data(), GL_DYNAMIC_DRAW);
+}
+
+void ClothRenderer::draw_markers(const Eigen::Matrix4f& view_projection, float pixel_scale) {
+    if (pinned_count_ + highlight_count_ + hover_count_ == 0) return;
+    glUseProgram(marker_program_.id());
+    glUniformMatrix4fv(marker_program_.uniform("u_view_projection"), 1, GL_FALSE, view_projection.data());
+    glBindVertexArray(vao_);
+    glVertexArrayElementBuffer(vao_, marker_buffer_);
+    glEnable(GL_PROGRAM_POINT_SIZE);
+    const GLint size = marker_program_.uniform("u_size"), colour = marker_program_.uniform("u_colour");
+    GLsizei first = 0;
+    auto draw = [&](GLsizei count, float px, float r, float g, float b) {
+        if (count == 0) return;
+        glUniform1f(size, px * pixel_scale);
+        glUniform3f(colour, r, g, b);
+        glDrawElementsBaseVertex(GL_POINTS, count, GL_UNSIGNED_INT,
+                                 reinterpret_cast<const void*>(static_cast<std::uintptr_t>(first) * 4),
+                                 base_vertex());
+        first += count;
+    };
+    draw(pinned_count_, 10.0f, 1.0f, 0.82f, 0.15f);   // pinned: amber
+    draw(highlight_count_, 14.0f, 0.2f, 0.9f, 1.0f);  // grabbed: cyan
+    draw(hover_count_, 9.0f, 0.95f, 0.95f, 0.95f);    // under the cursor: white
+    glVertexArrayElementBuffer(vao_, index_buffer_);
+}
+
+void ClothRenderer::end_frame() {
+    if (!frame_open_) return;
+    ring_.release(region_);
+    region_ = (region_ + 1) % VertexRing::region_count;
+    frame_open_ = false;
+}
+
+} // namespace drape::render
