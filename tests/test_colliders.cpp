@@ -1,4 +1,5 @@
-// Analytic colliders: no particle left inside, outside and pinned particles untouched, velocity response, validation.
+// Analytic colliders: no particle left inside, outside and pinned particles untouched, velocity response,
+// validation.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -50,10 +51,12 @@ std::vector<Collider> sample_colliders(ColliderSurface s) {
 }
 
 TEST(Collider, NoPointLeftInsideOutsidePointsAndPinnedUntouched) {
-    for (ColliderSurface s : {ColliderSurface{0.0f, 0.0f}, ColliderSurface{0.01f, 0.4f}, ColliderSurface{0.05f, 1.0f}}) {
+    for (ColliderSurface s :
+         {ColliderSurface{0.0f, 0.0f}, ColliderSurface{0.01f, 0.4f}, ColliderSurface{0.05f, 1.0f}}) {
         unsigned seed = 1;
         for (const Collider& col : sample_colliders(s)) {
-            SCOPED_TRACE(std::string(collider_kind_name(col.kind)) + " thickness " + std::to_string(s.thickness));
+            SCOPED_TRACE(std::string(collider_kind_name(col.kind)) + " thickness " +
+                         std::to_string(s.thickness));
             const Cloud before = random_cloud(seed++, {0.0f, 0.1f, 0.0f}, 0.6f, 40000);
             Cloud c = before;
             collide_range(col, c.x.data(), c.y.data(), c.z.data(), c.vx.data(), c.vy.data(), c.vz.data(),
@@ -148,13 +151,16 @@ TEST(Collider, EllipsoidClosestPointMatchesBruteForce) {
             const double d = std::hypot(double{x[0]} - q[0], double{x[1]} - q[1], double{x[2]} - q[2]);
             double best = 1e9;
             for (const Vec3f& s : surface)
-                best = std::min(best, std::hypot(double{s[0]} - q[0], double{s[1]} - q[1], double{s[2]} - q[2]));
+                best =
+                    std::min(best, std::hypot(double{s[0]} - q[0], double{s[1]} - q[1], double{s[2]} - q[2]));
             // The brute force is on a sampled surface: it can only be farther than the true closest point.
             EXPECT_LE(d, best + 1e-5) << "point " << q[0] << " " << q[1] << " " << q[2];
             // Closest-point condition: q - x is along the surface normal at x.
-            const double n[3] = {x[0] / (axes[0] * axes[0]), x[1] / (axes[1] * axes[1]), x[2] / (axes[2] * axes[2])};
+            const double n[3] = {x[0] / (axes[0] * axes[0]), x[1] / (axes[1] * axes[1]),
+                                 x[2] / (axes[2] * axes[2])};
             const double r[3] = {double{q[0]} - x[0], double{q[1]} - x[1], double{q[2]} - x[2]};
-            const double c[3] = {r[1] * n[2] - r[2] * n[1], r[2] * n[0] - r[0] * n[2], r[0] * n[1] - r[1] * n[0]};
+            const double c[3] = {r[1] * n[2] - r[2] * n[1], r[2] * n[0] - r[0] * n[2],
+                                 r[0] * n[1] - r[1] * n[0]};
             const double nn = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
             EXPECT_LT(std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) / nn, 1e-3 * d + 1e-6);
         }
@@ -203,8 +209,8 @@ TEST(Collider, DefaultBodyLeavesNoPointInside) {
     // Points in a shell around the body (the way cloth meets it) and deep inside.
     Cloud c = random_cloud(5, {0.0f, 0.0f, 0.0f}, 0.65f, 50000);
     const Cloud before = c;
-    collide_range(std::span<const Collider>(body), c.x.data(), c.y.data(), c.z.data(), c.vx.data(), c.vy.data(),
-                  c.vz.data(), c.inv_mass.data(), 0, c.size());
+    collide_range(std::span<const Collider>(body), c.x.data(), c.y.data(), c.z.data(), c.vx.data(),
+                  c.vy.data(), c.vz.data(), c.inv_mass.data(), 0, c.size());
     std::size_t inside_before = 0, inside_after = 0;
     for (std::size_t i = 0; i < c.size(); ++i) {
         bool was = false, is = false;
@@ -235,15 +241,30 @@ TEST(Collider, RejectsBadParametersNamingTheField) {
         return "";
     };
     EXPECT_NE(msg([] { make_sphere({0, 0, 0}, 0.0f); }).find("sphere.radius"), std::string::npos);
-    EXPECT_NE(msg([] { make_sphere({0, 0, 0}, 1.0f, {-0.1f, 0.2f}); }).find("sphere.thickness"), std::string::npos);
-    EXPECT_NE(msg([] { make_sphere({0, 0, 0}, 1.0f, {0.1f, 1.5f}); }).find("[0.000000, 1.000000]"),
+    EXPECT_NE(msg([] {
+                  make_sphere({0, 0, 0}, 1.0f, {-0.1f, 0.2f});
+              }).find("sphere.thickness"),
+              std::string::npos);
+    EXPECT_NE(msg([] {
+                  make_sphere({0, 0, 0}, 1.0f, {0.1f, 1.5f});
+              }).find("[0.000000, 1.000000]"),
               std::string::npos);
     EXPECT_NE(msg([] { make_disc({0, 0, 0}, 1.0f, 0.0f); }).find("disc.height"), std::string::npos);
-    EXPECT_NE(msg([] { make_capsule({0, 0, 0}, {1, 0, 0}, -1.0f); }).find("capsule.radius"), std::string::npos);
-    EXPECT_NE(msg([] { make_ellipsoid({0, 0, 0}, {1, 0, 1}); }).find("ellipsoid.semi_axes[1]"), std::string::npos);
-    EXPECT_NE(msg([] { make_ellipsoid({0, 0, 0}, {1, 1, 1}, {}, {1, 0, 0, 0, 1, 0, 0, 0, -1}); }).find("determinant"),
+    EXPECT_NE(msg([] {
+                  make_capsule({0, 0, 0}, {1, 0, 0}, -1.0f);
+              }).find("capsule.radius"),
               std::string::npos);
-    EXPECT_NE(msg([] { make_ellipsoid({0, 0, 0}, {1, 1, 1}, {}, {1, 0, 0, 0, 2, 0, 0, 0, 1}); }).find("orthonormal"),
+    EXPECT_NE(msg([] {
+                  make_ellipsoid({0, 0, 0}, {1, 0, 1});
+              }).find("ellipsoid.semi_axes[1]"),
+              std::string::npos);
+    EXPECT_NE(msg([] {
+                  make_ellipsoid({0, 0, 0}, {1, 1, 1}, {}, {1, 0, 0, 0, 1, 0, 0, 0, -1});
+              }).find("determinant"),
+              std::string::npos);
+    EXPECT_NE(msg([] {
+                  make_ellipsoid({0, 0, 0}, {1, 1, 1}, {}, {1, 0, 0, 0, 2, 0, 0, 0, 1});
+              }).find("orthonormal"),
               std::string::npos);
     EXPECT_NE(msg([] { make_plane({0, 0, 0}, {0, 0, 0}); }).find("plane.normal"), std::string::npos);
     EXPECT_NE(msg([] { make_sphere({NAN, 0, 0}, 1.0f); }).find("sphere.centre[0]"), std::string::npos);

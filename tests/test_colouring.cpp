@@ -39,7 +39,8 @@ void check_groups(const ColourGroups& g, std::span<const Edge> edges, std::size_
         }
         // Sorted by lower particle index.
         for (std::size_t k = 1; k < grp.size(); ++k)
-            EXPECT_LE(std::min(edges[grp[k - 1]].a, edges[grp[k - 1]].b), std::min(edges[grp[k]].a, edges[grp[k]].b));
+            EXPECT_LE(std::min(edges[grp[k - 1]].a, edges[grp[k - 1]].b),
+                      std::min(edges[grp[k]].a, edges[grp[k]].b));
     }
     if (g.colour_count > 0) {
         EXPECT_EQ(g.largest_group, largest);
@@ -50,7 +51,8 @@ void check_groups(const ColourGroups& g, std::span<const Edge> edges, std::size_
 
 std::vector<std::uint32_t> iota_edges(std::size_t n) {
     std::vector<std::uint32_t> v(n);
-    for (std::size_t k = 0; k < n; ++k) v[k] = static_cast<std::uint32_t>(k);
+    for (std::size_t k = 0; k < n; ++k)
+        v[k] = static_cast<std::uint32_t>(k);
     return v;
 }
 
@@ -67,8 +69,8 @@ TEST(Colour, HangClothNeedsFewColoursAndNoOverflow) {
         EXPECT_LE(g.colour_count, 23u); // greedy: at most 2 * 12 - 1 for the 12-neighbour grid
         if (n == 100) {
             RecordProperty("colours", static_cast<int>(g.colour_count));
-            std::printf("hang N=100: %zu springs, %u colours, largest group %zu, smallest %zu\n", edges.size(),
-                        g.colour_count, g.largest_group, g.smallest_group);
+            std::printf("hang N=100: %zu springs, %u colours, largest group %zu, smallest %zu\n",
+                        edges.size(), g.colour_count, g.largest_group, g.smallest_group);
         }
         // Deterministic.
         const ColourGroups again = colour_edges(edges, s.cloth.particle_count);
@@ -115,7 +117,8 @@ TEST(Colour, RandomGraphsAndOverflow) {
     }
     // A star: every edge shares particle 0; 8 colours of one edge each, the rest overflows.
     std::vector<Edge> star;
-    for (std::uint32_t k = 1; k <= 100; ++k) star.push_back({0, k, SpringKind::seam, 0.01f});
+    for (std::uint32_t k = 1; k <= 100; ++k)
+        star.push_back({0, k, SpringKind::seam, 0.01f});
     const ColourGroups g = colour_edges(star, 101, {}, 8);
     check_groups(g, star, 101, iota_edges(star.size()));
     EXPECT_EQ(g.colour_count, 8u);

@@ -24,25 +24,29 @@ double orient(const Points& p, std::uint32_t a, std::uint32_t b, std::uint32_t c
 double hull_area(const Points& p) {
     std::vector<std::uint32_t> idx(p.x.size());
     std::iota(idx.begin(), idx.end(), 0u);
-    std::sort(idx.begin(), idx.end(), [&](auto a, auto b) { return p.x[a] != p.x[b] ? p.x[a] < p.x[b] : p.y[a] < p.y[b]; });
+    std::sort(idx.begin(), idx.end(),
+              [&](auto a, auto b) { return p.x[a] != p.x[b] ? p.x[a] < p.x[b] : p.y[a] < p.y[b]; });
     std::vector<std::uint32_t> h(2 * idx.size());
     std::size_t k = 0;
     for (std::size_t i = 0; i < idx.size(); ++i) {
-        while (k >= 2 && orient(p, h[k - 2], h[k - 1], idx[i]) <= 0) --k;
+        while (k >= 2 && orient(p, h[k - 2], h[k - 1], idx[i]) <= 0)
+            --k;
         h[k++] = idx[i];
     }
     for (std::size_t i = idx.size() - 1, t = k + 1; i > 0; --i) {
-        while (k >= t && orient(p, h[k - 2], h[k - 1], idx[i - 1]) <= 0) --k;
+        while (k >= t && orient(p, h[k - 2], h[k - 1], idx[i - 1]) <= 0)
+            --k;
         h[k++] = idx[i - 1];
     }
     double s = 0;
-    for (std::size_t i = 0; i + 1 < k; ++i) s += p.x[h[i]] * p.y[h[i + 1]] - p.x[h[i + 1]] * p.y[h[i]];
+    for (std::size_t i = 0; i + 1 < k; ++i)
+        s += p.x[h[i]] * p.y[h[i + 1]] - p.x[h[i + 1]] * p.y[h[i]];
     return 0.5 * s;
 }
 
 // Checks every triangle: counter-clockwise and no point strictly inside its circumcircle (tolerance: the
-// triangulation is exact on points snapped to a 2^28 lattice over the bounding box, so co-circular points may come out
-// either way within a few lattice quanta, ~4e-9 of the extent). Brute force. Returns the total area.
+// triangulation is exact on points snapped to a 2^28 lattice over the bounding box, so co-circular points may
+// come out either way within a few lattice quanta, ~4e-9 of the extent). Brute force. Returns the total area.
 double check_delaunay(const Points& p, const std::vector<std::uint32_t>& tris, double scale) {
     double area = 0;
     const double tol = 1e-7 * scale;
@@ -60,8 +64,8 @@ double check_delaunay(const Points& p, const std::vector<std::uint32_t>& tris, d
         for (std::size_t i = 0; i < p.x.size(); ++i) {
             const double di = std::hypot(p.x[i] - p.x[a] - ux, p.y[i] - p.y[a] - uy);
             if (di < r - tol) {
-                ADD_FAILURE() << "point " << i << " is inside the circumcircle of triangle " << t / 3 << " by "
-                              << r - di;
+                ADD_FAILURE() << "point " << i << " is inside the circumcircle of triangle " << t / 3
+                              << " by " << r - di;
                 return area;
             }
         }
@@ -85,7 +89,8 @@ TEST(Delaunay, RandomPointsHaveEmptyCircumcirclesAndCoverTheHull) {
         EXPECT_NEAR(area, hull_area(p), 1e-9);
         // Every point is a vertex of some triangle.
         std::vector<int> used(n, 0);
-        for (auto v : tris) used[v] = 1;
+        for (auto v : tris)
+            used[v] = 1;
         EXPECT_EQ(std::count(used.begin(), used.end(), 1), static_cast<long>(n));
     }
 }
@@ -97,7 +102,8 @@ TEST(Delaunay, GridsWithCoCircularPoints) {
             Points p;
             for (std::size_t j = 0; j < n; ++j)
                 for (std::size_t i = 0; i < n; ++i) {
-                    const double x = 0.1 * static_cast<double>(i) + 5.0, y = 0.1 * static_cast<double>(j) - 2.0;
+                    const double x = 0.1 * static_cast<double>(i) + 5.0,
+                                 y = 0.1 * static_cast<double>(j) - 2.0;
                     p.x.push_back(std::cos(angle) * x - std::sin(angle) * y);
                     p.y.push_back(std::sin(angle) * x + std::cos(angle) * y);
                 }

@@ -14,13 +14,16 @@
 namespace drape {
 namespace {
 
-MaskPanel full_mask(std::size_t w, std::size_t h) { return {std::vector<std::string>(h, std::string(w, '1'))}; }
+MaskPanel full_mask(std::size_t w, std::size_t h) {
+    return {std::vector<std::string>(h, std::string(w, '1'))};
+}
 
 struct KindCounts {
     std::size_t structural, shear, bend;
 };
 KindCounts counts(const GarmentAssembly& a) {
-    return {a.edge_count(SpringKind::structural), a.edge_count(SpringKind::shear), a.edge_count(SpringKind::bend)};
+    return {a.edge_count(SpringKind::structural), a.edge_count(SpringKind::shear),
+            a.edge_count(SpringKind::bend)};
 }
 
 double dist(const GarmentAssembly& a, std::uint32_t i, std::uint32_t j) {
@@ -53,7 +56,13 @@ template <class F> std::string error_of(F&& f) {
 // ---------------------------------------------------------------------------------------------------------------------
 
 TEST(GarmentMask, FullRectangleMatchesTheGridFormula) {
-    for (auto [w, h] : {std::pair<std::size_t, std::size_t>{1, 1}, {1, 5}, {5, 1}, {2, 2}, {3, 2}, {5, 3}, {7, 11},
+    for (auto [w, h] : {std::pair<std::size_t, std::size_t>{1, 1},
+                        {1, 5},
+                        {5, 1},
+                        {2, 2},
+                        {3, 2},
+                        {5, 3},
+                        {7, 11},
                         {32, 32}}) {
         GarmentAssembly a;
         const MaskPanelBuild b = add_mask_panel(a, full_mask(w, h), 0.01f, 0.001f);
@@ -135,9 +144,11 @@ TEST(GarmentMask, RestLengthsWindingAndFrame) {
     EXPECT_EQ(b.particle_at(0, 0), -1);
     EXPECT_EQ(b.particle_at(-1, 0), -1);
     // Every mass as given; the cloth cooks.
-    for (float m : a.mass) EXPECT_EQ(m, 0.002f);
+    for (float m : a.mass)
+        EXPECT_EQ(m, 0.002f);
     std::array<SpringMaterial, spring_kind_count> mat{};
-    for (auto& m : mat) m = {1000.0f, 0.1f};
+    for (auto& m : mat)
+        m = {1000.0f, 0.1f};
     const Cloth c = cook_cloth(a.inverse_masses(), a.edges, mat);
     EXPECT_EQ(c.particle_count, a.particle_count());
 }
@@ -145,26 +156,37 @@ TEST(GarmentMask, RestLengthsWindingAndFrame) {
 TEST(GarmentMask, TwoPanelsAppendToOneAssembly) {
     GarmentAssembly a;
     const MaskPanelBuild p1 = add_mask_panel(a, full_mask(3, 3), 0.1f, 0.01f);
-    const MaskPanelBuild p2 = add_mask_panel(a, full_mask(4, 2), 0.1f, 0.01f, {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}});
+    const MaskPanelBuild p2 =
+        add_mask_panel(a, full_mask(4, 2), 0.1f, 0.01f, {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}});
     EXPECT_EQ(p1.first_particle, 0u);
     EXPECT_EQ(p2.first_particle, 9u);
     EXPECT_EQ(a.particle_count(), 17u);
     EXPECT_EQ(p2.first_edge, p1.edge_count);
-    for (std::size_t e = p2.first_edge; e < p2.first_edge + p2.edge_count; ++e) EXPECT_GE(a.edges[e].a, 9u);
-    for (std::size_t t = p2.first_triangle * 3; t < a.triangles.size(); ++t) EXPECT_GE(a.triangles[t], 9u);
+    for (std::size_t e = p2.first_edge; e < p2.first_edge + p2.edge_count; ++e)
+        EXPECT_GE(a.edges[e].a, 9u);
+    for (std::size_t t = p2.first_triangle * 3; t < a.triangles.size(); ++t)
+        EXPECT_GE(a.triangles[t], 9u);
 }
 
 TEST(GarmentMask, RejectsBadMasksNamingRowAndColumn) {
     GarmentAssembly a;
     EXPECT_NE(error_of([&] { add_mask_panel(a, {{}}, 0.1f, 0.01f); }).find("no rows"), std::string::npos);
-    EXPECT_NE(error_of([&] { add_mask_panel(a, {{"111", "11"}}, 0.1f, 0.01f); }).find("row 1 has 2 columns"),
+    EXPECT_NE(error_of([&] {
+                  add_mask_panel(a, {{"111", "11"}}, 0.1f, 0.01f);
+              }).find("row 1 has 2 columns"),
               std::string::npos);
-    EXPECT_NE(error_of([&] { add_mask_panel(a, {{"111", "111", "1101"}}, 0.1f, 0.01f); }).find("row 2 has 4"),
+    EXPECT_NE(error_of([&] {
+                  add_mask_panel(a, {{"111", "111", "1101"}}, 0.1f, 0.01f);
+              }).find("row 2 has 4"),
               std::string::npos);
-    EXPECT_NE(error_of([&] { add_mask_panel(a, {{"1111", "1111", "111x"}}, 0.1f, 0.01f); })
-                  .find("row 2, column 3 holds 'x'"),
+    EXPECT_NE(error_of([&] {
+                  add_mask_panel(a, {{"1111", "1111", "111x"}}, 0.1f, 0.01f);
+              }).find("row 2, column 3 holds 'x'"),
               std::string::npos);
-    EXPECT_NE(error_of([&] { add_mask_panel(a, {{"000", "000"}}, 0.1f, 0.01f); }).find("no '1'"), std::string::npos);
+    EXPECT_NE(error_of([&] {
+                  add_mask_panel(a, {{"000", "000"}}, 0.1f, 0.01f);
+              }).find("no '1'"),
+              std::string::npos);
     EXPECT_NE(error_of([&] { add_mask_panel(a, {{""}}, 0.1f, 0.01f); }).find("row 0 has 0 columns"),
               std::string::npos);
     EXPECT_NE(error_of([&] { add_mask_panel(a, full_mask(4097, 1), 0.1f, 0.01f); }).find("allowed 1..4096"),
@@ -175,8 +197,9 @@ TEST(GarmentMask, RejectsBadMasksNamingRowAndColumn) {
               std::string::npos);
     EXPECT_NE(error_of([&] { add_mask_panel(a, full_mask(2, 2), 0.1f, -1.0f); }).find("particle mass"),
               std::string::npos);
-    EXPECT_NE(error_of([&] { add_mask_panel(a, full_mask(2, 2), 0.1f, 0.01f, {{0, 0, 0}, {1, 0, 0}, {1, 0, 0}}); })
-                  .find("orthogonal"),
+    EXPECT_NE(error_of([&] {
+                  add_mask_panel(a, full_mask(2, 2), 0.1f, 0.01f, {{0, 0, 0}, {1, 0, 0}, {1, 0, 0}});
+              }).find("orthogonal"),
               std::string::npos);
     EXPECT_EQ(a.particle_count(), 0u); // nothing appended on error
 }
@@ -217,15 +240,18 @@ TEST(GarmentTShirt, SeedResolutionHas1008ParticlesInTwoIdenticalPanels) {
         EXPECT_GT(k < t.front.triangle_count ? n[2] : -n[2], 0.0);
     }
     // Mask symmetric left-right; sizes: 0.88 m span, 0.68 m tall at h = 1/35 m.
-    for (const std::string& row : t.mask.rows) EXPECT_TRUE(std::equal(row.begin(), row.end(), row.rbegin()));
+    for (const std::string& row : t.mask.rows)
+        EXPECT_TRUE(std::equal(row.begin(), row.end(), row.rbegin()));
     EXPECT_EQ(t.mask.rows.size(), 25u);
     EXPECT_EQ(t.mask.rows[0].size(), 31u);
     float total = 0;
-    for (float m : t.assembly.mass) total += m;
+    for (float m : t.assembly.mass)
+        total += m;
     EXPECT_NEAR(total, 0.15f, 1e-5f);
     // It cooks (seam rest lengths are positive, no duplicate springs).
     std::array<SpringMaterial, spring_kind_count> mat{};
-    for (auto& m : mat) m = {1000.0f, 0.1f};
+    for (auto& m : mat)
+        m = {1000.0f, 0.1f};
     EXPECT_NO_THROW(cook_cloth(t.assembly.inverse_masses(), t.assembly.edges, mat));
 }
 
@@ -233,7 +259,8 @@ TEST(GarmentTShirt, SeamsOnlyOnShouldersSidesAndUnderarms) {
     const TShirtBuild t = build_tshirt({});
     const std::size_t rows = t.front.rows, cols = t.front.columns;
     const std::int64_t m = static_cast<std::int64_t>(cols / 2);
-    std::set<std::uint32_t> front_boundary(t.front.boundary_particles.begin(), t.front.boundary_particles.end());
+    std::set<std::uint32_t> front_boundary(t.front.boundary_particles.begin(),
+                                           t.front.boundary_particles.end());
     std::set<std::uint32_t> back_boundary(t.back.boundary_particles.begin(), t.back.boundary_particles.end());
     // Cell of a front particle.
     std::vector<std::pair<std::int64_t, std::int64_t>> cell(t.assembly.particle_count(), {-1, -1});
@@ -261,7 +288,9 @@ TEST(GarmentTShirt, SeamsOnlyOnShouldersSidesAndUnderarms) {
         const auto [r, c] = cell[f];
         ++parts[static_cast<int>(t.seam_part[k])];
         switch (t.seam_part[k]) {
-        case SeamPart::shoulder: EXPECT_EQ(r, 0); break;
+        case SeamPart::shoulder:
+            EXPECT_EQ(r, 0);
+            break;
         case SeamPart::underarm:
             EXPECT_GT(r, 0);
             EXPECT_GT(std::abs(c - m), static_cast<std::int64_t>(0.24 * 35 + 0.5)); // under a sleeve
@@ -275,9 +304,9 @@ TEST(GarmentTShirt, SeamsOnlyOnShouldersSidesAndUnderarms) {
     EXPECT_GT(parts[0], 0u);
     EXPECT_GT(parts[1], 0u);
     EXPECT_GT(parts[2], 0u);
-    // A boundary particle is sewn unless it is on the neck (below row 0 near the centre; the neck is 0.20 m wide and
-    // 0.08 m deep), the hem (last row) between the two side seams, or a cuff (first or last column) between the
-    // shoulder and the underarm.
+    // A boundary particle is sewn unless it is on the neck (below row 0 near the centre; the neck is 0.20 m
+    // wide and 0.08 m deep), the hem (last row) between the two side seams, or a cuff (first or last column)
+    // between the shoulder and the underarm.
     const std::int64_t body = static_cast<std::int64_t>(0.24 * 35 + 0.5);
     std::size_t open[3] = {0, 0, 0};
     for (std::uint32_t f : t.front.boundary_particles) {
@@ -304,7 +333,8 @@ TEST(GarmentTShirt, HighResolutionReaches100kParticles) {
     EXPECT_LT(t.assembly.particle_count(), 110'000u);
     EXPECT_EQ(t.front.particle_count, t.back.particle_count);
     std::array<SpringMaterial, spring_kind_count> mat{};
-    for (auto& m : mat) m = {1000.0f, 0.01f};
+    for (auto& m : mat)
+        m = {1000.0f, 0.01f};
     const Cloth c = cook_cloth(t.assembly.inverse_masses(), t.assembly.edges, mat);
     EXPECT_EQ(c.particle_count, t.assembly.particle_count());
 }
@@ -314,7 +344,8 @@ TEST(GarmentTShirt, StartsOutsideTheDefaultBody) {
     const auto body = default_body();
     for (std::size_t i = 0; i < t.assembly.particle_count(); ++i)
         for (const Collider& c : body)
-            EXPECT_FALSE(is_inside(c, {t.assembly.x[i], t.assembly.y[i], t.assembly.z[i]})) << "particle " << i;
+            EXPECT_FALSE(is_inside(c, {t.assembly.x[i], t.assembly.y[i], t.assembly.z[i]}))
+                << "particle " << i;
     // The shoulder line is above the shoulders, the hem below the torso's middle.
     EXPECT_NEAR(*std::max_element(t.assembly.y.begin(), t.assembly.y.end()), 0.33f, 1e-6f);
     EXPECT_LT(*std::min_element(t.assembly.y.begin(), t.assembly.y.end()), -0.3f);
@@ -360,28 +391,40 @@ TEST(GarmentOutline, SquarePanelCoversItsOutline) {
     // Fill points: 21x21 grid minus its outline ring (too close to the outline) -> 19 x 19.
     EXPECT_EQ(b.particle_count, 80u + 19u * 19u);
     double mass = 0;
-    for (float m : a.mass) mass += m;
+    for (float m : a.mass)
+        mass += m;
     EXPECT_NEAR(mass, 0.15, 1e-5);
     // Springs: structural = distinct triangle edges = V + T - 1 (Euler, one face), bend = interior edges.
     const std::size_t V = a.particle_count(), T = a.triangle_count();
     EXPECT_EQ(a.edge_count(SpringKind::structural), V + T - 1);
     EXPECT_LE(a.edge_count(SpringKind::bend), V + T - 1 - b.outline_particles.size());
     EXPECT_GT(a.edge_count(SpringKind::bend), 0u);
-    for (const Edge& e : a.edges) EXPECT_NEAR(e.rest, dist(a, e.a, e.b), 1e-6);
+    for (const Edge& e : a.edges)
+        EXPECT_NEAR(e.rest, dist(a, e.a, e.b), 1e-6);
     // Counter-clockwise seen from u x v = -z with the default frame.
-    for (std::size_t t = 0; t < T; ++t) EXPECT_LT(tri_normal(a, t)[2], 0.0);
+    for (std::size_t t = 0; t < T; ++t)
+        EXPECT_LT(tri_normal(a, t)[2], 0.0);
     std::array<SpringMaterial, spring_kind_count> mat{};
-    for (auto& m : mat) m = {1000.0f, 0.1f};
+    for (auto& m : mat)
+        m = {1000.0f, 0.1f};
     EXPECT_NO_THROW(cook_cloth(a.inverse_masses(), a.edges, mat));
 }
 
 TEST(GarmentOutline, NonConvexPanelsCoverTheirOutlineWithinSamplingTolerance) {
     const OutlinePanel shapes[] = {
-        {{{0, 0}, {0.6, 0}, {0.6, 0.2}, {0.2, 0.2}, {0.2, 0.8}, {0, 0.8}}},                  // L, CCW
-        {{{0, 0}, {0, 0.5}, {0.5, 0.5}, {0.5, 0}}},                                          // square, CW
+        {{{0, 0}, {0.6, 0}, {0.6, 0.2}, {0.2, 0.2}, {0.2, 0.8}, {0, 0.8}}}, // L, CCW
+        {{{0, 0}, {0, 0.5}, {0.5, 0.5}, {0.5, 0}}},                         // square, CW
         {{{0, 0}, {0.5, 0.1}, {1.0, 0}, {0.9, 0.5}, {1.0, 1.0}, {0.5, 0.9}, {0, 1}, {0.1, 0.5}}}, // star-ish
-        {{{-0.25, 0}, {0.25, 0}, {0.25, 0.5}, {0.42, 0.45}, {0.36, 0.6}, {0.1, 0.7}, {-0.1, 0.7}, {-0.36, 0.6},
-          {-0.42, 0.45}, {-0.25, 0.5}}}, // a T-shirt-like front
+        {{{-0.25, 0},
+          {0.25, 0},
+          {0.25, 0.5},
+          {0.42, 0.45},
+          {0.36, 0.6},
+          {0.1, 0.7},
+          {-0.1, 0.7},
+          {-0.36, 0.6},
+          {-0.42, 0.45},
+          {-0.25, 0.5}}}, // a T-shirt-like front
     };
     for (const OutlinePanel& shape : shapes) {
         for (double h : {0.05, 0.02, 0.0137}) {
@@ -391,8 +434,9 @@ TEST(GarmentOutline, NonConvexPanelsCoverTheirOutlineWithinSamplingTolerance) {
             const OutlinePanelBuild b = add_outline_panel(a, shape, p);
             const double area = assembly_area(a, 0, a.triangle_count());
             SCOPED_TRACE("h = " + std::to_string(h) + ", polygon area " + std::to_string(b.area));
-            // The outline samples (spacing <= h) and the fill's clearance of h/2 make every outline piece a Delaunay
-            // edge, so the kept triangles tile the polygon: the areas agree to float rounding of the positions.
+            // The outline samples (spacing <= h) and the fill's clearance of h/2 make every outline piece a
+            // Delaunay edge, so the kept triangles tile the polygon: the areas agree to float rounding of the
+            // positions.
             EXPECT_NEAR(area, b.area, 1e-6 * b.area);
             EXPECT_EQ(b.outline_vertex_arc.size(), shape.outline.size());
         }
@@ -402,17 +446,30 @@ TEST(GarmentOutline, NonConvexPanelsCoverTheirOutlineWithinSamplingTolerance) {
 TEST(GarmentOutline, RejectsBadOutlines) {
     GarmentAssembly a;
     OutlinePanelParams p;
-    EXPECT_NE(error_of([&] { add_outline_panel(a, {{{0, 0}, {1, 0}}}, p); }).find("2 vertices"), std::string::npos);
-    EXPECT_NE(error_of([&] { add_outline_panel(a, {{{0, 0}, {1, 0}, {1, 0}, {0, 1}}}, p); }).find("coincide"),
+    EXPECT_NE(error_of([&] {
+                  add_outline_panel(a, {{{0, 0}, {1, 0}}}, p);
+              }).find("2 vertices"),
               std::string::npos);
-    EXPECT_NE(error_of([&] { add_outline_panel(a, {{{0, 0}, {3, 0}, {3, 1}, {1, -1}, {0, 2}}}, p); }).find("intersect"),
+    EXPECT_NE(error_of([&] {
+                  add_outline_panel(a, {{{0, 0}, {1, 0}, {1, 0}, {0, 1}}}, p);
+              }).find("coincide"),
               std::string::npos);
-    EXPECT_NE(error_of([&] { add_outline_panel(a, {{{0, 0}, {1, 0}, {2, 0}}}, p); }).find("zero area"),
+    EXPECT_NE(error_of([&] {
+                  add_outline_panel(a, {{{0, 0}, {3, 0}, {3, 1}, {1, -1}, {0, 2}}}, p);
+              }).find("intersect"),
               std::string::npos);
-    EXPECT_NE(error_of([&] { add_outline_panel(a, {{{0, 0}, {NAN, 0}, {0, 1}}}, p); }).find("vertex 1"),
+    EXPECT_NE(error_of([&] {
+                  add_outline_panel(a, {{{0, 0}, {1, 0}, {2, 0}}}, p);
+              }).find("zero area"),
+              std::string::npos);
+    EXPECT_NE(error_of([&] {
+                  add_outline_panel(a, {{{0, 0}, {NAN, 0}, {0, 1}}}, p);
+              }).find("vertex 1"),
               std::string::npos);
     p.spacing = 1e-4;
-    EXPECT_NE(error_of([&] { add_outline_panel(a, {{{0, 0}, {1, 0}, {1, 1}, {0, 1}}}, p); }).find("max_points"),
+    EXPECT_NE(error_of([&] {
+                  add_outline_panel(a, {{{0, 0}, {1, 0}, {1, 1}, {0, 1}}}, p);
+              }).find("max_points"),
               std::string::npos);
     EXPECT_EQ(a.particle_count(), 0u);
 }
@@ -430,8 +487,10 @@ TEST(GarmentSewing, TwoPanelsSewnAlongMatchingEdgesByArcLength) {
     const auto ba = outline_stretch_particles(back, {1, 2, false});
     ASSERT_EQ(fa.size(), 13u); // 0.6 / 0.05 + 1
     ASSERT_EQ(ba.size(), 16u); // 0.6 / 0.04 = 15 pieces + 1
-    for (std::uint32_t i : fa) EXPECT_NEAR(a.x[i], 0.4f, 1e-6f);
-    for (std::size_t k = 1; k < fa.size(); ++k) EXPECT_GT(a.y[fa[k]], a.y[fa[k - 1]]);
+    for (std::uint32_t i : fa)
+        EXPECT_NEAR(a.x[i], 0.4f, 1e-6f);
+    for (std::size_t k = 1; k < fa.size(); ++k)
+        EXPECT_GT(a.y[fa[k]], a.y[fa[k - 1]]);
     const std::size_t before = a.edges.size();
     const auto seams = sew_by_arc_length(a, fa, ba, 0.005f);
     EXPECT_EQ(a.edges.size(), before + seams.size());
@@ -456,14 +515,18 @@ TEST(GarmentSewing, TwoPanelsSewnAlongMatchingEdgesByArcLength) {
     // Wrapping stretch 3 -> 0 (the left edge): 13 particles at u = 0.
     const auto left = outline_stretch_particles(front, {3, 0, false});
     EXPECT_EQ(left.size(), 13u);
-    for (std::uint32_t i : left) EXPECT_NEAR(a.x[i], 0.0f, 1e-6f);
+    for (std::uint32_t i : left)
+        EXPECT_NEAR(a.x[i], 0.0f, 1e-6f);
     // Sewing the same stretches again adds nothing (pairs already joined).
     EXPECT_TRUE(sew_by_arc_length(a, fa, ba, 0.005f).empty());
     std::array<SpringMaterial, spring_kind_count> mat{};
-    for (auto& m : mat) m = {1000.0f, 0.1f};
+    for (auto& m : mat)
+        m = {1000.0f, 0.1f};
     EXPECT_NO_THROW(cook_cloth(a.inverse_masses(), a.edges, mat));
     EXPECT_NE(error_of([&] { sew_by_arc_length(a, fa, ba, 0.0f); }).find("seam rest"), std::string::npos);
-    EXPECT_NE(error_of([&] { outline_stretch_particles(front, {0, 4, false}); }).find("outside [0, 3]"),
+    EXPECT_NE(error_of([&] {
+                  outline_stretch_particles(front, {0, 4, false});
+              }).find("outside [0, 3]"),
               std::string::npos);
 }
 

@@ -11,11 +11,16 @@ namespace drape {
 
 const char* collider_kind_name(ColliderKind kind) noexcept {
     switch (kind) {
-    case ColliderKind::plane: return "plane";
-    case ColliderKind::sphere: return "sphere";
-    case ColliderKind::disc: return "disc";
-    case ColliderKind::capsule: return "capsule";
-    case ColliderKind::ellipsoid: return "ellipsoid";
+    case ColliderKind::plane:
+        return "plane";
+    case ColliderKind::sphere:
+        return "sphere";
+    case ColliderKind::disc:
+        return "disc";
+    case ColliderKind::capsule:
+        return "capsule";
+    case ColliderKind::ellipsoid:
+        return "ellipsoid";
     }
     return "unknown";
 }
@@ -32,8 +37,8 @@ void check_range(const std::string& name, float value, float lo, float hi, const
 
 void check_positive(const std::string& name, float value, const char* unit) {
     if (!(value > 0.0f && value <= max_extent))
-        throw InvalidInput(name + " = " + std::to_string(value) + unit + " is outside the allowed range (0, " +
-                           std::to_string(max_extent) + "]");
+        throw InvalidInput(name + " = " + std::to_string(value) + unit +
+                           " is outside the allowed range (0, " + std::to_string(max_extent) + "]");
 }
 
 void check_point(const std::string& name, const Vec3f& p) {
@@ -43,7 +48,9 @@ void check_point(const std::string& name, const Vec3f& p) {
                                " m is outside the allowed range [-1000, 1000]");
 }
 
-std::string prefix(ColliderKind kind) { return std::string(collider_kind_name(kind)) + "."; }
+std::string prefix(ColliderKind kind) {
+    return std::string(collider_kind_name(kind)) + ".";
+}
 
 Collider with_surface(ColliderKind kind, const ColliderSurface& s) {
     Collider c;
@@ -53,22 +60,27 @@ Collider with_surface(ColliderKind kind, const ColliderSurface& s) {
     return c;
 }
 
-inline float dot3(const Vec3f& a, const Vec3f& b) noexcept { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+inline float dot3(const Vec3f& a, const Vec3f& b) noexcept {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
 
 // ---------------------------------------------------------------------------------------------------------------------
-// Inside tests: branch-free arithmetic on one point, the same expressions in the batch pre-pass and in the projection
-// (so a point the pre-pass calls outside is exactly one the projection would leave alone).
+// Inside tests: branch-free arithmetic on one point, the same expressions in the batch pre-pass and in the
+// projection (so a point the pre-pass calls outside is exactly one the projection would leave alone).
 
 inline float capsule_t(const Collider& col, float x, float y, float z) noexcept {
-    const float abx = col.axis[0] - col.centre[0], aby = col.axis[1] - col.centre[1], abz = col.axis[2] - col.centre[2];
+    const float abx = col.axis[0] - col.centre[0], aby = col.axis[1] - col.centre[1],
+                abz = col.axis[2] - col.centre[2];
     const float len2 = abx * abx + aby * aby + abz * abz;
     const float t = ((x - col.centre[0]) * abx + (y - col.centre[1]) * aby + (z - col.centre[2]) * abz) /
                     (len2 > 0.0f ? len2 : 1.0f);
     return std::min(std::max(t, 0.0f), 1.0f);
 }
 
-// Ellipsoid level f = sum (q_i / A_i)^2 of the inflated ellipsoid (A = semi-axes + thickness); q = R^T (p - c).
-inline float ellipsoid_level(const Collider& col, float x, float y, float z, Vec3f* out_local = nullptr) noexcept {
+// Ellipsoid level f = sum (q_i / A_i)^2 of the inflated ellipsoid (A = semi-axes + thickness); q = R^T (p -
+// c).
+inline float ellipsoid_level(const Collider& col, float x, float y, float z,
+                             Vec3f* out_local = nullptr) noexcept {
     const auto& R = col.rotation;
     const float wx = x - col.centre[0], wy = y - col.centre[1], wz = z - col.centre[2];
     const float qx = R[0] * wx + R[3] * wy + R[6] * wz, qy = R[1] * wx + R[4] * wy + R[7] * wz,
@@ -174,23 +186,27 @@ inline Projection project_ellipsoid(const Collider& col, float x, float y, float
              R[6] * n[0] + R[7] * n[1] + R[8] * n[2]}};
 }
 
-template <ColliderKind K> inline Projection project_kind(const Collider& col, float x, float y, float z) noexcept {
+template <ColliderKind K>
+inline Projection project_kind(const Collider& col, float x, float y, float z) noexcept {
     Projection pr;
     if constexpr (K == ColliderKind::plane) pr = project_plane(col, x, y, z);
-    if constexpr (K == ColliderKind::sphere) pr = project_round(col.centre, col.size[0] + col.thickness, x, y, z);
+    if constexpr (K == ColliderKind::sphere)
+        pr = project_round(col.centre, col.size[0] + col.thickness, x, y, z);
     if constexpr (K == ColliderKind::capsule) {
         const float t = capsule_t(col, x, y, z);
-        const Vec3f c{col.centre[0] + t * (col.axis[0] - col.centre[0]), col.centre[1] + t * (col.axis[1] - col.centre[1]),
+        const Vec3f c{col.centre[0] + t * (col.axis[0] - col.centre[0]),
+                      col.centre[1] + t * (col.axis[1] - col.centre[1]),
                       col.centre[2] + t * (col.axis[2] - col.centre[2])};
         pr = project_round(c, col.size[0] + col.thickness, x, y, z);
     }
     if constexpr (K == ColliderKind::disc) pr = project_disc(col, x, y, z);
     if constexpr (K == ColliderKind::ellipsoid) pr = project_ellipsoid(col, x, y, z);
-    // Float rounding can leave the projected point a hair inside; step out along the normal until the inside test
-    // (the one the kernel uses) agrees, so a point is never found inside the same collider twice.
+    // Float rounding can leave the projected point a hair inside; step out along the normal until the inside
+    // test (the one the kernel uses) agrees, so a point is never found inside the same collider twice.
     float step = 1e-7f; // m
     for (int k = 0; k < 24 && inside_kind<K>(col, pr.point[0], pr.point[1], pr.point[2]); ++k, step *= 2.0f)
-        for (int c = 0; c < 3; ++c) pr.point[c] += step * pr.normal[c];
+        for (int c = 0; c < 3; ++c)
+            pr.point[c] += step * pr.normal[c];
     return pr;
 }
 
@@ -212,8 +228,9 @@ inline void respond(const Vec3f& n, float mu, float& vx, float& vy, float& vz) n
 }
 
 // ---------------------------------------------------------------------------------------------------------------------
-// Batch kernel: particles in chunks; per chunk and collider, a branch-free pre-pass flags the particles inside (a
-// plain loop the compiler can vectorise), then the flagged ones are projected one by one (contacts are few).
+// Batch kernel: particles in chunks; per chunk and collider, a branch-free pre-pass flags the particles
+// inside (a plain loop the compiler can vectorise), then the flagged ones are projected one by one (contacts
+// are few).
 
 constexpr std::size_t collide_chunk = 64;
 
@@ -228,7 +245,8 @@ struct SoA {
 };
 
 template <ColliderKind K>
-std::size_t collide_chunk_with(const Collider& col, const SoA& s, std::size_t begin, std::size_t end) noexcept {
+std::size_t collide_chunk_with(const Collider& col, const SoA& s, std::size_t begin,
+                               std::size_t end) noexcept {
     std::uint8_t flag[collide_chunk];
     const std::size_t n = end - begin;
     const float* __restrict x = s.x + begin;
@@ -251,13 +269,19 @@ std::size_t collide_chunk_with(const Collider& col, const SoA& s, std::size_t be
     return contacts;
 }
 
-std::size_t collide_chunk_any(const Collider& col, const SoA& s, std::size_t begin, std::size_t end) noexcept {
+std::size_t collide_chunk_any(const Collider& col, const SoA& s, std::size_t begin,
+                              std::size_t end) noexcept {
     switch (col.kind) {
-    case ColliderKind::plane: return collide_chunk_with<ColliderKind::plane>(col, s, begin, end);
-    case ColliderKind::sphere: return collide_chunk_with<ColliderKind::sphere>(col, s, begin, end);
-    case ColliderKind::disc: return collide_chunk_with<ColliderKind::disc>(col, s, begin, end);
-    case ColliderKind::capsule: return collide_chunk_with<ColliderKind::capsule>(col, s, begin, end);
-    case ColliderKind::ellipsoid: return collide_chunk_with<ColliderKind::ellipsoid>(col, s, begin, end);
+    case ColliderKind::plane:
+        return collide_chunk_with<ColliderKind::plane>(col, s, begin, end);
+    case ColliderKind::sphere:
+        return collide_chunk_with<ColliderKind::sphere>(col, s, begin, end);
+    case ColliderKind::disc:
+        return collide_chunk_with<ColliderKind::disc>(col, s, begin, end);
+    case ColliderKind::capsule:
+        return collide_chunk_with<ColliderKind::capsule>(col, s, begin, end);
+    case ColliderKind::ellipsoid:
+        return collide_chunk_with<ColliderKind::ellipsoid>(col, s, begin, end);
     }
     return 0;
 }
@@ -279,7 +303,9 @@ void check_collider(const Collider& c) {
             throw InvalidInput(pre + "normal has length " + std::to_string(len) + " (must be 1 within 1e-4)");
         break;
     }
-    case ColliderKind::sphere: check_positive(pre + "radius", c.size[0], " m"); break;
+    case ColliderKind::sphere:
+        check_positive(pre + "radius", c.size[0], " m");
+        break;
     case ColliderKind::disc:
         check_positive(pre + "radius", c.size[0], " m");
         check_positive(pre + "height", c.size[1], " m");
@@ -290,23 +316,27 @@ void check_collider(const Collider& c) {
         break;
     case ColliderKind::ellipsoid: {
         static const char* axis_name[3] = {"semi_axes[0]", "semi_axes[1]", "semi_axes[2]"};
-        for (int k = 0; k < 3; ++k) check_positive(pre + axis_name[k], c.size[k], " m");
+        for (int k = 0; k < 3; ++k)
+            check_positive(pre + axis_name[k], c.size[k], " m");
         const auto& R = c.rotation;
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) {
                 // Columns i and j of R: dot = delta_ij.
                 const float d = R[i] * R[j] + R[3 + i] * R[3 + j] + R[6 + i] * R[6 + j];
                 if (!(std::abs(d - (i == j ? 1.0f : 0.0f)) <= 1e-4f))
-                    throw InvalidInput(pre + "rotation is not orthonormal (columns " + std::to_string(i) + " . " +
-                                       std::to_string(j) + " = " + std::to_string(d) + ")");
+                    throw InvalidInput(pre + "rotation is not orthonormal (columns " + std::to_string(i) +
+                                       " . " + std::to_string(j) + " = " + std::to_string(d) + ")");
             }
         const float det = R[0] * (R[4] * R[8] - R[5] * R[7]) - R[1] * (R[3] * R[8] - R[5] * R[6]) +
                           R[2] * (R[3] * R[7] - R[4] * R[6]);
         if (!(det > 0.0f))
-            throw InvalidInput(pre + "rotation has determinant " + std::to_string(det) + " (must be +1: no mirroring)");
+            throw InvalidInput(pre + "rotation has determinant " + std::to_string(det) +
+                               " (must be +1: no mirroring)");
         break;
     }
-    default: throw InvalidInput("collider kind " + std::to_string(static_cast<int>(c.kind)) + " is unknown (0..4)");
+    default:
+        throw InvalidInput("collider kind " + std::to_string(static_cast<int>(c.kind)) +
+                           " is unknown (0..4)");
     }
 }
 
@@ -314,7 +344,8 @@ Collider make_plane(Vec3f point, Vec3f normal, ColliderSurface surface) {
     Collider c = with_surface(ColliderKind::plane, surface);
     c.centre = point;
     const float len = std::sqrt(dot3(normal, normal));
-    if (!(len > 0.0f) || !std::isfinite(len)) throw InvalidInput("plane.normal has length " + std::to_string(len) + " (must be > 0)");
+    if (!(len > 0.0f) || !std::isfinite(len))
+        throw InvalidInput("plane.normal has length " + std::to_string(len) + " (must be > 0)");
     c.axis = {normal[0] / len, normal[1] / len, normal[2] / len};
     check_collider(c);
     return c;
@@ -350,7 +381,8 @@ Collider make_capsule(Vec3f a, Vec3f b, float radius, ColliderSurface surface) {
     return c;
 }
 
-Collider make_ellipsoid(Vec3f centre, Vec3f semi_axes, ColliderSurface surface, const std::array<float, 9>& rotation) {
+Collider make_ellipsoid(Vec3f centre, Vec3f semi_axes, ColliderSurface surface,
+                        const std::array<float, 9>& rotation) {
     Collider c = with_surface(ColliderKind::ellipsoid, surface);
     c.centre = centre;
     c.size = semi_axes;
@@ -360,27 +392,30 @@ Collider make_ellipsoid(Vec3f centre, Vec3f semi_axes, ColliderSurface surface, 
 }
 
 std::array<float, 9> rotation_about_axis(Vec3f axis, float angle) {
-    const double len = std::sqrt(double{axis[0]} * axis[0] + double{axis[1]} * axis[1] + double{axis[2]} * axis[2]);
+    const double len =
+        std::sqrt(double{axis[0]} * axis[0] + double{axis[1]} * axis[1] + double{axis[2]} * axis[2]);
     if (!(len > 0.0) || !std::isfinite(len))
         throw InvalidInput("rotation axis has length " + std::to_string(len) + " (must be > 0)");
     if (!std::isfinite(angle)) throw InvalidInput("rotation angle is not finite");
     const double x = axis[0] / len, y = axis[1] / len, z = axis[2] / len;
     const double c = std::cos(double{angle}), s = std::sin(double{angle}), C = 1.0 - c;
     // Rodrigues' formula.
-    const double m[9] = {c + x * x * C,     x * y * C - z * s, x * z * C + y * s, y * x * C + z * s, c + y * y * C,
-                         y * z * C - x * s, z * x * C - y * s, z * y * C + x * s, c + z * z * C};
+    const double m[9] = {c + x * x * C,     x * y * C - z * s, x * z * C + y * s,
+                         y * x * C + z * s, c + y * y * C,     y * z * C - x * s,
+                         z * x * C - y * s, z * y * C + x * s, c + z * z * C};
     std::array<float, 9> out{};
-    for (int k = 0; k < 9; ++k) out[k] = static_cast<float>(m[k]);
+    for (int k = 0; k < 9; ++k)
+        out[k] = static_cast<float>(m[k]);
     return out;
 }
 
 std::vector<Collider> default_body(ColliderSurface s) {
     return {
-        make_ellipsoid({0.0f, 0.0f, 0.0f}, {0.16f, 0.30f, 0.10f}, s),     // torso
-        make_ellipsoid({0.0f, -0.30f, 0.0f}, {0.17f, 0.15f, 0.11f}, s),   // hips
-        make_ellipsoid({0.0f, 0.22f, 0.0f}, {0.21f, 0.07f, 0.09f}, s),    // shoulders
-        make_ellipsoid({0.0f, 0.34f, 0.0f}, {0.05f, 0.07f, 0.05f}, s),    // neck
-        make_ellipsoid({0.0f, 0.48f, 0.0f}, {0.08f, 0.11f, 0.09f}, s),    // head
+        make_ellipsoid({0.0f, 0.0f, 0.0f}, {0.16f, 0.30f, 0.10f}, s),      // torso
+        make_ellipsoid({0.0f, -0.30f, 0.0f}, {0.17f, 0.15f, 0.11f}, s),    // hips
+        make_ellipsoid({0.0f, 0.22f, 0.0f}, {0.21f, 0.07f, 0.09f}, s),     // shoulders
+        make_ellipsoid({0.0f, 0.34f, 0.0f}, {0.05f, 0.07f, 0.05f}, s),     // neck
+        make_ellipsoid({0.0f, 0.48f, 0.0f}, {0.08f, 0.11f, 0.09f}, s),     // head
         make_ellipsoid({-0.40f, 0.22f, 0.0f}, {0.22f, 0.045f, 0.045f}, s), // right arm (x < 0)
         make_ellipsoid({0.40f, 0.22f, 0.0f}, {0.22f, 0.045f, 0.045f}, s),  // left arm (x > 0)
     };
@@ -398,9 +433,9 @@ Vec3f ellipsoid_closest_point(Vec3f semi_axes, Vec3f q_in) noexcept {
         // On a symmetry plane the closest point is not unique and the root sits at the pole: nudge off it.
         if (std::abs(q[k]) < 1e-9 * a[k]) q[k] = q[k] < 0.0 ? -1e-9 * a[k] : 1e-9 * a[k];
     }
-    // F(s) = sum (a_i q_i / (a_i^2 + s))^2 - 1: decreasing and convex on (-min a_i^2, inf), +inf at the pole. Inside,
-    // F(0) < 0 and the root lies in (-min a_i^2, 0). Newton from s = 0 lands left of the root (convexity) and then
-    // climbs to it monotonically; a step leaving the bracket is replaced by bisection.
+    // F(s) = sum (a_i q_i / (a_i^2 + s))^2 - 1: decreasing and convex on (-min a_i^2, inf), +inf at the pole.
+    // Inside, F(0) < 0 and the root lies in (-min a_i^2, 0). Newton from s = 0 lands left of the root
+    // (convexity) and then climbs to it monotonically; a step leaving the bracket is replaced by bisection.
     const double amin2 = std::min({a2[0], a2[1], a2[2]});
     double lo = -amin2, hi = 0.0, s = 0.0;
     for (int it = 0; it < 100; ++it) {
@@ -423,18 +458,22 @@ Vec3f ellipsoid_closest_point(Vec3f semi_axes, Vec3f q_in) noexcept {
         if (done) break;
     }
     double x[3];
-    for (int k = 0; k < 3; ++k) x[k] = a2[k] * q[k] / (a2[k] + s);
+    for (int k = 0; k < 3; ++k)
+        x[k] = a2[k] * q[k] / (a2[k] + s);
     // Radial snap onto the surface, then out by a few float ulps until the float point is not inside.
     double g = 0.0;
-    for (int k = 0; k < 3; ++k) g += (x[k] / a[k]) * (x[k] / a[k]);
+    for (int k = 0; k < 3; ++k)
+        g += (x[k] / a[k]) * (x[k] / a[k]);
     const double scale = 1.0 / std::sqrt(g);
-    Vec3f out{static_cast<float>(x[0] * scale), static_cast<float>(x[1] * scale), static_cast<float>(x[2] * scale)};
+    Vec3f out{static_cast<float>(x[0] * scale), static_cast<float>(x[1] * scale),
+              static_cast<float>(x[2] * scale)};
     for (int it = 0; it < 8; ++it) {
         const float f = (out[0] / semi_axes[0]) * (out[0] / semi_axes[0]) +
                         (out[1] / semi_axes[1]) * (out[1] / semi_axes[1]) +
                         (out[2] / semi_axes[2]) * (out[2] / semi_axes[2]);
         if (f >= 1.0f) break;
-        for (float& v : out) v *= 1.0f + 2e-7f;
+        for (float& v : out)
+            v *= 1.0f + 2e-7f;
     }
     return out;
 }
@@ -447,11 +486,21 @@ Contact project_point(const Collider& col, Vec3f p) noexcept {
         out = {true, pr.point, pr.normal};
     };
     switch (col.kind) {
-    case ColliderKind::plane: run.operator()<ColliderKind::plane>(); break;
-    case ColliderKind::sphere: run.operator()<ColliderKind::sphere>(); break;
-    case ColliderKind::disc: run.operator()<ColliderKind::disc>(); break;
-    case ColliderKind::capsule: run.operator()<ColliderKind::capsule>(); break;
-    case ColliderKind::ellipsoid: run.operator()<ColliderKind::ellipsoid>(); break;
+    case ColliderKind::plane:
+        run.operator()<ColliderKind::plane>();
+        break;
+    case ColliderKind::sphere:
+        run.operator()<ColliderKind::sphere>();
+        break;
+    case ColliderKind::disc:
+        run.operator()<ColliderKind::disc>();
+        break;
+    case ColliderKind::capsule:
+        run.operator()<ColliderKind::capsule>();
+        break;
+    case ColliderKind::ellipsoid:
+        run.operator()<ColliderKind::ellipsoid>();
+        break;
     }
     return out;
 }
@@ -460,22 +509,26 @@ bool is_inside(const Collider& col, Vec3f p, float slack) noexcept {
     Collider c = col;
     c.thickness = col.thickness - slack; // may go negative: a point on the surface is then outside
     switch (col.kind) {
-    case ColliderKind::plane: return inside_kind<ColliderKind::plane>(c, p[0], p[1], p[2]);
+    case ColliderKind::plane:
+        return inside_kind<ColliderKind::plane>(c, p[0], p[1], p[2]);
     case ColliderKind::sphere:
-        return std::hypot(p[0] - c.centre[0], p[1] - c.centre[1], p[2] - c.centre[2]) < c.size[0] + c.thickness;
+        return std::hypot(p[0] - c.centre[0], p[1] - c.centre[1], p[2] - c.centre[2]) <
+               c.size[0] + c.thickness;
     case ColliderKind::capsule: {
         const float t = capsule_t(c, p[0], p[1], p[2]);
         return std::hypot(p[0] - (c.centre[0] + t * (c.axis[0] - c.centre[0])),
                           p[1] - (c.centre[1] + t * (c.axis[1] - c.centre[1])),
                           p[2] - (c.centre[2] + t * (c.axis[2] - c.centre[2]))) < c.size[0] + c.thickness;
     }
-    case ColliderKind::ellipsoid: return ellipsoid_level(c, p[0], p[1], p[2]) < 1.0f;
+    case ColliderKind::ellipsoid:
+        return ellipsoid_level(c, p[0], p[1], p[2]) < 1.0f;
     case ColliderKind::disc: {
         // Signed distance to the solid cylinder (negative inside: minus the depth below the nearest face).
         const float R = col.size[0], top = col.centre[1], bottom = col.centre[1] - col.size[1];
         const float dx = p[0] - col.centre[0], dz = p[2] - col.centre[2];
         const float r = std::sqrt(dx * dx + dz * dz);
-        const float er = std::max(r - R, 0.0f), ey = p[1] > top ? p[1] - top : (p[1] < bottom ? bottom - p[1] : 0.0f);
+        const float er = std::max(r - R, 0.0f),
+                    ey = p[1] > top ? p[1] - top : (p[1] < bottom ? bottom - p[1] : 0.0f);
         const float sd = (er == 0.0f && ey == 0.0f) ? -std::min({top - p[1], R - r, p[1] - bottom})
                                                     : std::sqrt(er * er + ey * ey);
         return sd < c.thickness;
@@ -490,20 +543,23 @@ bool is_inside(const Collider& col, Vec3f p, float slack) noexcept {
 void collide_range(const Collider& col, float* x, float* y, float* z, float* vx, float* vy, float* vz,
                    const float* inv_mass, std::size_t begin, std::size_t end) noexcept {
     const SoA s{x, y, z, vx, vy, vz, inv_mass};
-    for (std::size_t c = begin; c < end; c += collide_chunk) collide_chunk_any(col, s, c, std::min(end, c + collide_chunk));
+    for (std::size_t c = begin; c < end; c += collide_chunk)
+        collide_chunk_any(col, s, c, std::min(end, c + collide_chunk));
 }
 
-void collide_range(std::span<const Collider> colliders, float* x, float* y, float* z, float* vx, float* vy, float* vz,
-                   const float* inv_mass, std::size_t begin, std::size_t end) noexcept {
-    // Per chunk: passes over the colliders in order until a pass finds no contact (at most 4). A particle's own
-    // sequence of projections is the same as if it were processed alone: further passes leave a clean particle alone.
+void collide_range(std::span<const Collider> colliders, float* x, float* y, float* z, float* vx, float* vy,
+                   float* vz, const float* inv_mass, std::size_t begin, std::size_t end) noexcept {
+    // Per chunk: passes over the colliders in order until a pass finds no contact (at most 4). A particle's
+    // own sequence of projections is the same as if it were processed alone: further passes leave a clean
+    // particle alone.
     constexpr int max_passes = 4;
     const SoA s{x, y, z, vx, vy, vz, inv_mass};
     for (std::size_t c = begin; c < end; c += collide_chunk) {
         const std::size_t c_end = std::min(end, c + collide_chunk);
         for (int pass = 0; pass < max_passes; ++pass) {
             std::size_t contacts = 0;
-            for (const Collider& col : colliders) contacts += collide_chunk_any(col, s, c, c_end);
+            for (const Collider& col : colliders)
+                contacts += collide_chunk_any(col, s, c, c_end);
             if (contacts == 0) break;
         }
     }

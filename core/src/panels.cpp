@@ -34,9 +34,11 @@ void check_frame(const PanelFrame& f) {
             throw InvalidInput("panel frame has a non-finite origin or axis component");
     const double lu = std::sqrt(dot(f.axis_u, f.axis_u)), lv = std::sqrt(dot(f.axis_v, f.axis_v));
     if (std::abs(lu - 1.0) > 1e-4)
-        throw InvalidInput("panel frame axis_u has length " + std::to_string(lu) + " (must be 1 within 1e-4)");
+        throw InvalidInput("panel frame axis_u has length " + std::to_string(lu) +
+                           " (must be 1 within 1e-4)");
     if (std::abs(lv - 1.0) > 1e-4)
-        throw InvalidInput("panel frame axis_v has length " + std::to_string(lv) + " (must be 1 within 1e-4)");
+        throw InvalidInput("panel frame axis_v has length " + std::to_string(lv) +
+                           " (must be 1 within 1e-4)");
     const double d = dot(f.axis_u, f.axis_v);
     if (std::abs(d) > 1e-4)
         throw InvalidInput("panel frame axes are not orthogonal: axis_u . axis_v = " + std::to_string(d) +
@@ -71,7 +73,8 @@ std::uint64_t pair_key(std::uint32_t a, std::uint32_t b) noexcept {
 
 std::vector<float> GarmentAssembly::inverse_masses() const {
     std::vector<float> inv(mass.size());
-    for (std::size_t i = 0; i < mass.size(); ++i) inv[i] = 1.0f / mass[i];
+    for (std::size_t i = 0; i < mass.size(); ++i)
+        inv[i] = 1.0f / mass[i];
     return inv;
 }
 
@@ -100,7 +103,8 @@ std::int32_t MaskPanelBuild::particle_at(std::int64_t row, std::int64_t column) 
 }
 
 void check_mask(const MaskPanel& mask) {
-    if (mask.rows.empty()) throw InvalidInput("mask has no rows (need 1.." + std::to_string(mask_max_side) + ")");
+    if (mask.rows.empty())
+        throw InvalidInput("mask has no rows (need 1.." + std::to_string(mask_max_side) + ")");
     if (mask.rows.size() > mask_max_side)
         throw InvalidInput("mask has " + std::to_string(mask.rows.size()) + " rows (allowed 1.." +
                            std::to_string(mask_max_side) + ")");
@@ -113,13 +117,14 @@ void check_mask(const MaskPanel& mask) {
         const std::string& row = mask.rows[r];
         if (row.size() != width)
             throw InvalidInput("mask row " + std::to_string(r) + " has " + std::to_string(row.size()) +
-                               " columns but row 0 has " + std::to_string(width) + " (a mask is rectangular)");
+                               " columns but row 0 has " + std::to_string(width) +
+                               " (a mask is rectangular)");
         for (std::size_t c = 0; c < width; ++c) {
             if (row[c] == '1')
                 ++ones;
             else if (row[c] != '0')
-                throw InvalidInput("mask row " + std::to_string(r) + ", column " + std::to_string(c) + " holds " +
-                                   describe_char(row[c]) + " (only '0' and '1' are allowed)");
+                throw InvalidInput("mask row " + std::to_string(r) + ", column " + std::to_string(c) +
+                                   " holds " + describe_char(row[c]) + " (only '0' and '1' are allowed)");
         }
     }
     if (ones == 0) throw InvalidInput("mask has no '1' (need at least one particle)");
@@ -141,7 +146,8 @@ MaskPanelBuild add_mask_panel(GarmentAssembly& io, const MaskPanel& mask, float 
     out.cell_particle.assign(std::size_t{rows} * cols, -1);
 
     std::size_t count = 0;
-    for (const std::string& row : mask.rows) count += static_cast<std::size_t>(std::count(row.begin(), row.end(), '1'));
+    for (const std::string& row : mask.rows)
+        count += static_cast<std::size_t>(std::count(row.begin(), row.end(), '1'));
     if (io.particle_count() + count > assembly_max_particles)
         throw InvalidInput("garment would have " + std::to_string(io.particle_count() + count) +
                            " particles (max 2^31-1)");
@@ -181,7 +187,8 @@ MaskPanelBuild add_mask_panel(GarmentAssembly& io, const MaskPanel& mask, float 
                 if (down >= 0 && at(r + 2, c) >= 0) push_edge(p, at(r + 2, c), SpringKind::bend, rest_bend);
             }
             // Shear (r,c+1)-(r+1,c) needs (r,c) or (r+1,c+1) present.
-            if (right >= 0 && down >= 0 && (p >= 0 || diag >= 0)) push_edge(right, down, SpringKind::shear, rest_shear);
+            if (right >= 0 && down >= 0 && (p >= 0 || diag >= 0))
+                push_edge(right, down, SpringKind::shear, rest_shear);
         }
     out.edge_count = io.edges.size() - out.first_edge;
 
@@ -211,7 +218,8 @@ MaskPanelBuild add_mask_panel(GarmentAssembly& io, const MaskPanel& mask, float 
             } else {
                 push_tri(a, b, d);
             }
-            for (std::size_t k = before; k < io.triangles.size(); ++k) in_triangle[io.triangles[k] - out.first_particle] = 1;
+            for (std::size_t k = before; k < io.triangles.size(); ++k)
+                in_triangle[io.triangles[k] - out.first_particle] = 1;
         }
     out.triangle_count = io.triangle_count() - out.first_triangle;
 
@@ -224,7 +232,8 @@ MaskPanelBuild add_mask_panel(GarmentAssembly& io, const MaskPanel& mask, float 
     std::sort(tri_edges.begin(), tri_edges.end());
     for (std::size_t k = 0; k < tri_edges.size();) {
         std::size_t m = k;
-        while (m < tri_edges.size() && tri_edges[m] == tri_edges[k]) ++m;
+        while (m < tri_edges.size() && tri_edges[m] == tri_edges[k])
+            ++m;
         if (m - k == 1) {
             const auto a = static_cast<std::uint32_t>(tri_edges[k] >> 32);
             const auto b = static_cast<std::uint32_t>(tri_edges[k] & 0xffffffffu);
@@ -235,7 +244,8 @@ MaskPanelBuild add_mask_panel(GarmentAssembly& io, const MaskPanel& mask, float 
         k = m;
     }
     for (std::size_t i = 0; i < count; ++i)
-        if (!in_triangle[i]) out.boundary_particles.push_back(out.first_particle + static_cast<std::uint32_t>(i));
+        if (!in_triangle[i])
+            out.boundary_particles.push_back(out.first_particle + static_cast<std::uint32_t>(i));
     std::sort(out.boundary_particles.begin(), out.boundary_particles.end());
     out.boundary_particles.erase(std::unique(out.boundary_particles.begin(), out.boundary_particles.end()),
                                  out.boundary_particles.end());
@@ -248,9 +258,9 @@ MaskPanelBuild add_mask_panel(GarmentAssembly& io, const MaskPanel& mask, float 
 namespace {
 
 // Pattern dimensions, m (see TShirtParams). At 35 cells per metre they give 504 particles per panel.
-constexpr double tshirt_half_span = 0.44;   // centre to cuff
-constexpr double tshirt_half_body = 0.24;   // centre to side
-constexpr double tshirt_height = 0.68;      // shoulder line to hem
+constexpr double tshirt_half_span = 0.44;    // centre to cuff
+constexpr double tshirt_half_body = 0.24;    // centre to side
+constexpr double tshirt_height = 0.68;       // shoulder line to hem
 constexpr double tshirt_sleeve_depth = 0.18; // shoulder line to the underside of a sleeve
 constexpr double tshirt_neck_half_width = 0.10;
 constexpr double tshirt_neck_depth = 0.08;
@@ -262,8 +272,8 @@ struct TShirtGrid {
 
 TShirtGrid tshirt_grid(double r) {
     auto cells = [r](double metres) { return static_cast<std::int64_t>(std::floor(metres * r + 0.5)); };
-    return {cells(tshirt_half_span), cells(tshirt_half_body), cells(tshirt_height) + 1, cells(tshirt_sleeve_depth),
-            tshirt_neck_half_width * r, tshirt_neck_depth * r};
+    return {cells(tshirt_half_span),    cells(tshirt_half_body),    cells(tshirt_height) + 1,
+            cells(tshirt_sleeve_depth), tshirt_neck_half_width * r, tshirt_neck_depth * r};
 }
 
 } // namespace
@@ -281,7 +291,8 @@ MaskPanel tshirt_mask(float cells_per_metre) {
             const bool sleeve = j <= g.s;
             const double nx = static_cast<double>(x) / g.neck_w, ny = static_cast<double>(j) / g.neck_d;
             const bool neck = nx * nx + ny * ny < 1.0;
-            if ((body || sleeve) && !neck) mask.rows[static_cast<std::size_t>(j)][static_cast<std::size_t>(c)] = '1';
+            if ((body || sleeve) && !neck)
+                mask.rows[static_cast<std::size_t>(j)][static_cast<std::size_t>(c)] = '1';
         }
     return mask;
 }
@@ -303,8 +314,8 @@ TShirtBuild build_tshirt(const TShirtParams& p) {
         per_panel += static_cast<std::size_t>(std::count(row.begin(), row.end(), '1'));
     const float particle_mass = static_cast<float>(p.total_mass / (2.0 * static_cast<double>(per_panel)));
 
-    // Front: normal +z, columns run along -x. Back: normal -z, columns along +x. Column c of the front and column
-    // 2m - c of the back sit at the same x.
+    // Front: normal +z, columns run along -x. Back: normal -z, columns along +x. Column c of the front and
+    // column 2m - c of the back sit at the same x.
     const float half_span = static_cast<float>(static_cast<double>(g.m) * h);
     PanelFrame front{{half_span, p.shoulder_y, 0.5f * p.gap}, {-1.0f, 0.0f, 0.0f}, {0.0f, -1.0f, 0.0f}};
     PanelFrame back{{-half_span, p.shoulder_y, -0.5f * p.gap}, {1.0f, 0.0f, 0.0f}, {0.0f, -1.0f, 0.0f}};
@@ -337,7 +348,8 @@ TShirtBuild build_tshirt(const TShirtParams& p) {
             out.seam_edges.push_back(static_cast<std::uint32_t>(out.assembly.edges.size()));
             out.seam_part.push_back(part);
             out.assembly.edges.push_back({static_cast<std::uint32_t>(std::min(f, b)),
-                                          static_cast<std::uint32_t>(std::max(f, b)), SpringKind::seam, seam_rest});
+                                          static_cast<std::uint32_t>(std::max(f, b)), SpringKind::seam,
+                                          seam_rest});
         }
     }
     return out;
@@ -362,15 +374,17 @@ inline i64 orient(const LatticePoint& a, const LatticePoint& b, const LatticePoi
     return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
 }
 
-// > 0 when d is strictly inside the circumcircle of the counter-clockwise triangle (a, b, c). Exact in 128 bits:
-// differences < 2^28, lifted terms < 2^57, each product < 2^115.
+// > 0 when d is strictly inside the circumcircle of the counter-clockwise triangle (a, b, c). Exact in 128
+// bits: differences < 2^28, lifted terms < 2^57, each product < 2^115.
 inline int in_circle(const LatticePoint& a, const LatticePoint& b, const LatticePoint& c,
                      const LatticePoint& d) noexcept {
-    const i64 adx = a.x - d.x, ady = a.y - d.y, bdx = b.x - d.x, bdy = b.y - d.y, cdx = c.x - d.x, cdy = c.y - d.y;
+    const i64 adx = a.x - d.x, ady = a.y - d.y, bdx = b.x - d.x, bdy = b.y - d.y, cdx = c.x - d.x,
+              cdy = c.y - d.y;
     const i128 alift = i128{adx} * adx + i128{ady} * ady;
     const i128 blift = i128{bdx} * bdx + i128{bdy} * bdy;
     const i128 clift = i128{cdx} * cdx + i128{cdy} * cdy;
-    const i128 det = alift * (i128{bdx} * cdy - i128{cdx} * bdy) + blift * (i128{cdx} * ady - i128{adx} * cdy) +
+    const i128 det = alift * (i128{bdx} * cdy - i128{cdx} * bdy) +
+                     blift * (i128{cdx} * ady - i128{adx} * cdy) +
                      clift * (i128{adx} * bdy - i128{bdx} * ady);
     return det > 0 ? 1 : (det < 0 ? -1 : 0);
 }
@@ -400,10 +414,11 @@ struct Triangle {
 
 constexpr std::uint32_t dead = std::numeric_limits<std::uint32_t>::max();
 
-// Bowyer-Watson with the super-triangle taken to infinity: one symbolic vertex `inf` and "ghost" triangles (a, b, inf)
-// on every convex-hull edge a -> b (the hull lies to its right). A ghost's circumcircle is the open half-plane left of
-// a -> b plus the open segment ab (J. R. Shewchuk's lecture notes on Delaunay refinement). So the triangulation always
-// covers exactly the convex hull: no sliver is lost to a finite super-triangle.
+// Bowyer-Watson with the super-triangle taken to infinity: one symbolic vertex `inf` and "ghost" triangles
+// (a, b, inf) on every convex-hull edge a -> b (the hull lies to its right). A ghost's circumcircle is the
+// open half-plane left of a -> b plus the open segment ab (J. R. Shewchuk's lecture notes on Delaunay
+// refinement). So the triangulation always covers exactly the convex hull: no sliver is lost to a finite
+// super-triangle.
 class BowyerWatson {
   public:
     // Starts from the counter-clockwise triangle (p0, p1, p2) and its three ghosts.
@@ -472,14 +487,14 @@ class BowyerWatson {
             set_adj(e.outside, e.b, e.a, t);
             fan_.push_back({e.a, t});
         }
-        // The cavity boundary is a simple polygon around p: each of its vertices starts exactly one boundary edge.
-        // Edge b -> p of the triangle on a -> b faces edge p -> b of the triangle on b -> c.
+        // The cavity boundary is a simple polygon around p: each of its vertices starts exactly one boundary
+        // edge. Edge b -> p of the triangle on a -> b faces edge p -> b of the triangle on b -> c.
         std::sort(fan_.begin(), fan_.end());
         for (std::size_t k = 0; k < fan_.size(); ++k) {
             const std::int32_t t = fan_[k].second;
             const std::uint32_t b = boundary_of(t, p);
-            const auto it =
-                std::lower_bound(fan_.begin(), fan_.end(), std::pair<std::uint32_t, std::int32_t>{b, INT32_MIN});
+            const auto it = std::lower_bound(fan_.begin(), fan_.end(),
+                                             std::pair<std::uint32_t, std::int32_t>{b, INT32_MIN});
             set_adj(t, b, p, it->second);
             set_adj(it->second, p, b, t);
         }
@@ -515,7 +530,8 @@ class BowyerWatson {
         for (int i = 0; i < 3; ++i)
             if (tris_[t].v[(i + 1) % 3] == u && tris_[t].v[(i + 2) % 3] == v) tris_[t].adj[i] = nb;
     }
-    // For a fan triangle built on boundary edge a -> b around p: b (the vertex before p in counter-clockwise order).
+    // For a fan triangle built on boundary edge a -> b around p: b (the vertex before p in counter-clockwise
+    // order).
     std::uint32_t boundary_of(std::int32_t t, std::uint32_t p) const noexcept {
         const Triangle& tri = tris_[t];
         for (int i = 0; i < 3; ++i)
@@ -536,9 +552,9 @@ class BowyerWatson {
                (q.x - b.x) * (a.x - b.x) + (q.y - b.y) * (a.y - b.y) > 0;
     }
 
-    // Visibility walk from the last created triangle to a real triangle containing q (inside or on its boundary),
-    // or to the ghost whose half-plane holds q when q is outside the hull. Terminates on a Delaunay triangulation;
-    // the first edge tried rotates so the walk never cycles on degenerate layouts.
+    // Visibility walk from the last created triangle to a real triangle containing q (inside or on its
+    // boundary), or to the ghost whose half-plane holds q when q is outside the hull. Terminates on a
+    // Delaunay triangulation; the first edge tried rotates so the walk never cycles on degenerate layouts.
     std::int32_t locate(const LatticePoint& q) const {
         std::int32_t t = last_;
         if (is_ghost(t)) {
@@ -623,30 +639,35 @@ std::vector<std::uint32_t> delaunay_triangulate(std::span<const double> px, std:
     // Insertion order: along a Hilbert curve (ties by index: deterministic).
     std::vector<std::uint64_t> key(n);
     for (std::uint32_t i : unique)
-        key[i] = hilbert_index(static_cast<std::uint32_t>(lattice[i].x >> 8), static_cast<std::uint32_t>(lattice[i].y >> 8));
+        key[i] = hilbert_index(static_cast<std::uint32_t>(lattice[i].x >> 8),
+                               static_cast<std::uint32_t>(lattice[i].y >> 8));
     std::sort(unique.begin(), unique.end(),
               [&](std::uint32_t a, std::uint32_t b) { return key[a] != key[b] ? key[a] < key[b] : a < b; });
     std::vector<LatticePoint> pts(unique.size());
-    for (std::size_t k = 0; k < unique.size(); ++k) pts[k] = lattice[unique[k]];
+    for (std::size_t k = 0; k < unique.size(); ++k)
+        pts[k] = lattice[unique[k]];
     // The first triangle: the first two points and the first point after them not collinear with them.
     std::uint32_t third = 2;
-    while (third < pts.size() && orient(pts[0], pts[1], pts[third]) == 0) ++third;
+    while (third < pts.size() && orient(pts[0], pts[1], pts[third]) == 0)
+        ++third;
     if (third == pts.size()) return {}; // all collinear
     const bool ccw = orient(pts[0], pts[1], pts[third]) > 0;
     BowyerWatson bw(pts, 0, ccw ? 1u : third, ccw ? third : 1u);
     for (std::uint32_t k = 1; k < pts.size(); ++k)
         if (k != third && k != 1) bw.insert(k);
     const std::vector<std::uint32_t> lattice_tris = bw.result();
-    // Drop slivers thinner than 4 lattice quanta (judged on the input coordinates): nearly collinear hull points give
-    // them, and rounding to the lattice may have turned them inside out.
+    // Drop slivers thinner than 4 lattice quanta (judged on the input coordinates): nearly collinear hull
+    // points give them, and rounding to the lattice may have turned them inside out.
     const double quantum = extent / static_cast<double>(lattice_max);
     std::vector<std::uint32_t> tris;
     tris.reserve(lattice_tris.size());
     for (std::size_t t = 0; t < lattice_tris.size(); t += 3) {
-        const std::uint32_t a = unique[lattice_tris[t]], b = unique[lattice_tris[t + 1]], c = unique[lattice_tris[t + 2]];
+        const std::uint32_t a = unique[lattice_tris[t]], b = unique[lattice_tris[t + 1]],
+                            c = unique[lattice_tris[t + 2]];
         const double o = (px[b] - px[a]) * (py[c] - py[a]) - (py[b] - py[a]) * (px[c] - px[a]);
-        const double longest = std::max({std::hypot(px[b] - px[a], py[b] - py[a]), std::hypot(px[c] - px[b], py[c] - py[b]),
-                                         std::hypot(px[a] - px[c], py[a] - py[c])});
+        const double longest =
+            std::max({std::hypot(px[b] - px[a], py[b] - py[a]), std::hypot(px[c] - px[b], py[c] - py[b]),
+                      std::hypot(px[a] - px[c], py[a] - py[c])});
         if (o <= 4.0 * quantum * longest) continue; // height = o / longest
         tris.insert(tris.end(), {a, b, c});
     }
@@ -658,27 +679,30 @@ std::vector<std::uint32_t> delaunay_triangulate(std::span<const double> px, std:
 
 namespace {
 
-double cross2(double ax, double ay, double bx, double by) noexcept { return ax * by - ay * bx; }
+double cross2(double ax, double ay, double bx, double by) noexcept {
+    return ax * by - ay * bx;
+}
 
 // Sign of the orientation of (a, b, c) with a relative tolerance (0 = collinear).
-int orient_sign(const std::array<double, 2>& a, const std::array<double, 2>& b, const std::array<double, 2>& c,
-                double tol) noexcept {
+int orient_sign(const std::array<double, 2>& a, const std::array<double, 2>& b,
+                const std::array<double, 2>& c, double tol) noexcept {
     const double o = cross2(b[0] - a[0], b[1] - a[1], c[0] - a[0], c[1] - a[1]);
     return o > tol ? 1 : (o < -tol ? -1 : 0);
 }
 
-bool on_segment(const std::array<double, 2>& a, const std::array<double, 2>& b, const std::array<double, 2>& p) {
+bool on_segment(const std::array<double, 2>& a, const std::array<double, 2>& b,
+                const std::array<double, 2>& p) {
     return std::min(a[0], b[0]) <= p[0] && p[0] <= std::max(a[0], b[0]) && std::min(a[1], b[1]) <= p[1] &&
            p[1] <= std::max(a[1], b[1]);
 }
 
-bool segments_touch(const std::array<double, 2>& a, const std::array<double, 2>& b, const std::array<double, 2>& c,
-                    const std::array<double, 2>& d, double tol) {
+bool segments_touch(const std::array<double, 2>& a, const std::array<double, 2>& b,
+                    const std::array<double, 2>& c, const std::array<double, 2>& d, double tol) {
     const int o1 = orient_sign(a, b, c, tol), o2 = orient_sign(a, b, d, tol), o3 = orient_sign(c, d, a, tol),
               o4 = orient_sign(c, d, b, tol);
     if (o1 != o2 && o3 != o4 && o1 != 0 && o2 != 0 && o3 != 0 && o4 != 0) return true;
-    return (o1 == 0 && on_segment(a, b, c)) || (o2 == 0 && on_segment(a, b, d)) || (o3 == 0 && on_segment(c, d, a)) ||
-           (o4 == 0 && on_segment(c, d, b));
+    return (o1 == 0 && on_segment(a, b, c)) || (o2 == 0 && on_segment(a, b, d)) ||
+           (o3 == 0 && on_segment(c, d, a)) || (o4 == 0 && on_segment(c, d, b));
 }
 
 double signed_area(const std::vector<std::array<double, 2>>& poly) {
@@ -717,13 +741,14 @@ void check_outline(const OutlinePanel& panel) {
             throw InvalidInput("outline vertex " + std::to_string(i) + " has a non-finite coordinate");
         extent = std::max({extent, std::abs(o[i][0]), std::abs(o[i][1])});
     }
-    if (extent > 1e3) throw InvalidInput("outline reaches " + std::to_string(extent) + " m from the origin (max 1000)");
+    if (extent > 1e3)
+        throw InvalidInput("outline reaches " + std::to_string(extent) + " m from the origin (max 1000)");
     for (std::size_t i = 0; i < n; ++i) {
         const auto& a = o[i];
         const auto& b = o[(i + 1) % n];
         if (a[0] == b[0] && a[1] == b[1])
-            throw InvalidInput("outline vertices " + std::to_string(i) + " and " + std::to_string((i + 1) % n) +
-                               " coincide (consecutive vertices must differ)");
+            throw InvalidInput("outline vertices " + std::to_string(i) + " and " +
+                               std::to_string((i + 1) % n) + " coincide (consecutive vertices must differ)");
     }
     const double area = std::abs(signed_area(o));
     if (!(area > 1e-12 * std::max(extent * extent, 1e-300)))
@@ -734,7 +759,8 @@ void check_outline(const OutlinePanel& panel) {
         const auto& b = o[(i + 1) % n];
         // Adjacent edges must not fold back onto each other.
         const auto& c = o[(i + 2) % n];
-        if (orient_sign(a, b, c, tol) == 0 && (c[0] - b[0]) * (a[0] - b[0]) + (c[1] - b[1]) * (a[1] - b[1]) > 0)
+        if (orient_sign(a, b, c, tol) == 0 &&
+            (c[0] - b[0]) * (a[0] - b[0]) + (c[1] - b[1]) * (a[1] - b[1]) > 0)
             throw InvalidInput("outline edges " + std::to_string(i) + " and " + std::to_string((i + 1) % n) +
                                " fold back onto each other (the outline must be simple)");
         for (std::size_t j = i + 2; j < n; ++j) {
@@ -746,8 +772,8 @@ void check_outline(const OutlinePanel& panel) {
     }
 }
 
-OutlinePanelBuild add_outline_panel(GarmentAssembly& io, const OutlinePanel& panel, const OutlinePanelParams& p,
-                                    const PanelFrame& frame) {
+OutlinePanelBuild add_outline_panel(GarmentAssembly& io, const OutlinePanel& panel,
+                                    const OutlinePanelParams& p, const PanelFrame& frame) {
     check_outline(panel);
     check_range("outline panel spacing", p.spacing, 1e-4, 10.0, " m");
     check_range("outline panel areal_density", p.areal_density, 1e-4, 100.0, " kg/m^2");
@@ -775,9 +801,10 @@ OutlinePanelBuild add_outline_panel(GarmentAssembly& io, const OutlinePanel& pan
     const double cols_d = std::floor((max_u - min_u) / h) + 1, rows_d = std::floor((max_v - min_v) / h) + 1;
     const double estimate = cols_d * rows_d + perimeter / h + 2.0 * static_cast<double>(nv);
     if (estimate > static_cast<double>(p.max_points))
-        throw InvalidInput("outline panel would need up to " + std::to_string(static_cast<long long>(estimate)) +
-                           " points at spacing " + std::to_string(h) + " m (max_points = " +
-                           std::to_string(p.max_points) + "); raise the spacing or max_points");
+        throw InvalidInput("outline panel would need up to " +
+                           std::to_string(static_cast<long long>(estimate)) + " points at spacing " +
+                           std::to_string(h) + " m (max_points = " + std::to_string(p.max_points) +
+                           "); raise the spacing or max_points");
     const std::size_t cols = static_cast<std::size_t>(cols_d), rows = static_cast<std::size_t>(rows_d);
 
     // Points: outline samples first (in outline order), then the fill, row by row.
@@ -788,7 +815,8 @@ OutlinePanelBuild add_outline_panel(GarmentAssembly& io, const OutlinePanel& pan
         const auto& a = poly[i];
         const auto& b = poly[(i + 1) % nv];
         const double len = std::hypot(b[0] - a[0], b[1] - a[1]);
-        const std::size_t pieces = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(len / h - 1e-9)));
+        const std::size_t pieces =
+            std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(len / h - 1e-9)));
         out.outline_vertex_arc[i] = s;
         for (std::size_t t = 0; t < pieces; ++t) {
             const double f = static_cast<double>(t) / static_cast<double>(pieces);
@@ -809,15 +837,20 @@ OutlinePanelBuild add_outline_panel(GarmentAssembly& io, const OutlinePanel& pan
             const auto& a = poly[i];
             const auto& b = poly[(i + 1) % nv];
             const double dx = b[0] - a[0], dy = b[1] - a[1], len2 = dx * dx + dy * dy;
-            const auto lo_c = static_cast<std::ptrdiff_t>(std::floor((std::min(a[0], b[0]) - clearance - min_u) / h));
-            const auto hi_c = static_cast<std::ptrdiff_t>(std::ceil((std::max(a[0], b[0]) + clearance - min_u) / h));
-            const auto lo_r = static_cast<std::ptrdiff_t>(std::floor((std::min(a[1], b[1]) - clearance - min_v) / h));
-            const auto hi_r = static_cast<std::ptrdiff_t>(std::ceil((std::max(a[1], b[1]) + clearance - min_v) / h));
+            const auto lo_c =
+                static_cast<std::ptrdiff_t>(std::floor((std::min(a[0], b[0]) - clearance - min_u) / h));
+            const auto hi_c =
+                static_cast<std::ptrdiff_t>(std::ceil((std::max(a[0], b[0]) + clearance - min_u) / h));
+            const auto lo_r =
+                static_cast<std::ptrdiff_t>(std::floor((std::min(a[1], b[1]) - clearance - min_v) / h));
+            const auto hi_r =
+                static_cast<std::ptrdiff_t>(std::ceil((std::max(a[1], b[1]) + clearance - min_v) / h));
             for (std::ptrdiff_t r = std::max<std::ptrdiff_t>(lo_r, 0);
                  r <= std::min<std::ptrdiff_t>(hi_r, static_cast<std::ptrdiff_t>(rows) - 1); ++r)
                 for (std::ptrdiff_t c = std::max<std::ptrdiff_t>(lo_c, 0);
                      c <= std::min<std::ptrdiff_t>(hi_c, static_cast<std::ptrdiff_t>(cols) - 1); ++c) {
-                    const double x = min_u + static_cast<double>(c) * h, y = min_v + static_cast<double>(r) * h;
+                    const double x = min_u + static_cast<double>(c) * h,
+                                 y = min_v + static_cast<double>(r) * h;
                     const double t = std::clamp(((x - a[0]) * dx + (y - a[1]) * dy) / len2, 0.0, 1.0);
                     const double ex = a[0] + t * dx - x, ey = a[1] + t * dy - y;
                     if (ex * ex + ey * ey < clearance * clearance)
@@ -843,21 +876,25 @@ OutlinePanelBuild add_outline_panel(GarmentAssembly& io, const OutlinePanel& pan
         const double cy = (pv[tris[t]] + pv[tris[t + 1]] + pv[tris[t + 2]]) / 3.0;
         if (inside_polygon(poly, cx, cy)) kept.insert(kept.end(), {tris[t], tris[t + 1], tris[t + 2]});
     }
-    if (kept.empty()) throw InvalidInput("outline panel has no triangle at spacing " + std::to_string(h) +
-                                         " m (the outline is too small or too thin for it)");
+    if (kept.empty())
+        throw InvalidInput("outline panel has no triangle at spacing " + std::to_string(h) +
+                           " m (the outline is too small or too thin for it)");
 
-    // Particles: the points used by kept triangles, in point order; lumped masses (1/3 of each triangle's area).
+    // Particles: the points used by kept triangles, in point order; lumped masses (1/3 of each triangle's
+    // area).
     const std::size_t np = pu.size();
     std::vector<double> lumped(np, 0.0);
     for (std::size_t t = 0; t < kept.size(); t += 3) {
         const std::uint32_t a = kept[t], b = kept[t + 1], c = kept[t + 2];
         const double area = 0.5 * cross2(pu[b] - pu[a], pv[b] - pv[a], pu[c] - pu[a], pv[c] - pv[a]);
-        for (std::uint32_t v : {a, b, c}) lumped[v] += area / 3.0;
+        for (std::uint32_t v : {a, b, c})
+            lumped[v] += area / 3.0;
     }
     std::vector<std::int64_t> particle(np, -1);
     out.first_particle = static_cast<std::uint32_t>(io.particle_count());
     std::size_t used = 0;
-    for (std::size_t i = 0; i < np; ++i) used += lumped[i] > 0 ? 1 : 0;
+    for (std::size_t i = 0; i < np; ++i)
+        used += lumped[i] > 0 ? 1 : 0;
     if (io.particle_count() + used > assembly_max_particles)
         throw InvalidInput("garment would have " + std::to_string(io.particle_count() + used) +
                            " particles (max 2^31-1)");
@@ -874,11 +911,12 @@ OutlinePanelBuild add_outline_panel(GarmentAssembly& io, const OutlinePanel& pan
     }
 
     out.first_triangle = io.triangle_count();
-    for (std::uint32_t v : kept) io.triangles.push_back(static_cast<std::uint32_t>(particle[v]));
+    for (std::uint32_t v : kept)
+        io.triangles.push_back(static_cast<std::uint32_t>(particle[v]));
     out.triangle_count = kept.size() / 3;
 
-    // Springs: one structural per triangle edge; one bend across each edge shared by two triangles, joining the two
-    // opposite vertices.
+    // Springs: one structural per triangle edge; one bend across each edge shared by two triangles, joining
+    // the two opposite vertices.
     struct HalfEdge {
         std::uint64_t key;
         std::uint32_t opposite;
@@ -892,10 +930,12 @@ OutlinePanelBuild add_outline_panel(GarmentAssembly& io, const OutlinePanel& pan
             const auto c = static_cast<std::uint32_t>(particle[kept[t + (k + 2) % 3]]);
             half.push_back({pair_key(a, b), c});
         }
-    std::sort(half.begin(), half.end(),
-              [](const HalfEdge& l, const HalfEdge& r) { return l.key != r.key ? l.key < r.key : l.opposite < r.opposite; });
+    std::sort(half.begin(), half.end(), [](const HalfEdge& l, const HalfEdge& r) {
+        return l.key != r.key ? l.key < r.key : l.opposite < r.opposite;
+    });
     auto dist = [&](std::uint32_t a, std::uint32_t b) {
-        const double dx = double{io.x[a]} - io.x[b], dy = double{io.y[a]} - io.y[b], dz = double{io.z[a]} - io.z[b];
+        const double dx = double{io.x[a]} - io.x[b], dy = double{io.y[a]} - io.y[b],
+                     dz = double{io.z[a]} - io.z[b];
         return static_cast<float>(std::sqrt(dx * dx + dy * dy + dz * dz));
     };
     out.first_edge = io.edges.size();
@@ -904,7 +944,8 @@ OutlinePanelBuild add_outline_panel(GarmentAssembly& io, const OutlinePanel& pan
     std::vector<std::uint64_t> cross;
     for (std::size_t k = 0; k < half.size();) {
         std::size_t m = k;
-        while (m < half.size() && half[m].key == half[k].key) ++m;
+        while (m < half.size() && half[m].key == half[k].key)
+            ++m;
         const auto a = static_cast<std::uint32_t>(half[k].key >> 32);
         const auto b = static_cast<std::uint32_t>(half[k].key & 0xffffffffu);
         io.edges.push_back({a, b, SpringKind::structural, dist(a, b)});
@@ -922,15 +963,18 @@ OutlinePanelBuild add_outline_panel(GarmentAssembly& io, const OutlinePanel& pan
     return out;
 }
 
-std::vector<std::uint32_t> outline_stretch_particles(const OutlinePanelBuild& build, const OutlineStretch& stretch) {
+std::vector<std::uint32_t> outline_stretch_particles(const OutlinePanelBuild& build,
+                                                     const OutlineStretch& stretch) {
     const std::size_t nv = build.outline_vertex_arc.size();
     if (stretch.from_vertex >= nv || stretch.to_vertex >= nv)
         throw InvalidInput("outline stretch " + std::to_string(stretch.from_vertex) + " -> " +
                            std::to_string(stretch.to_vertex) + " names a vertex outside [0, " +
                            std::to_string(nv == 0 ? 0 : nv - 1) + "]");
-    const double s0 = build.outline_vertex_arc[stretch.from_vertex], s1 = build.outline_vertex_arc[stretch.to_vertex];
-    const double length = stretch.from_vertex == stretch.to_vertex ? build.perimeter
-                                                                   : (s1 >= s0 ? s1 - s0 : build.perimeter - s0 + s1);
+    const double s0 = build.outline_vertex_arc[stretch.from_vertex],
+                 s1 = build.outline_vertex_arc[stretch.to_vertex];
+    const double length = stretch.from_vertex == stretch.to_vertex
+                              ? build.perimeter
+                              : (s1 >= s0 ? s1 - s0 : build.perimeter - s0 + s1);
     std::vector<std::pair<double, std::uint32_t>> on;
     for (std::size_t k = 0; k < build.outline_particles.size(); ++k) {
         double d = build.outline_arc[k] - s0;
@@ -941,7 +985,8 @@ std::vector<std::uint32_t> outline_stretch_particles(const OutlinePanelBuild& bu
     std::sort(on.begin(), on.end());
     std::vector<std::uint32_t> out;
     out.reserve(on.size());
-    for (const auto& e : on) out.push_back(e.second);
+    for (const auto& e : on)
+        out.push_back(e.second);
     if (stretch.reversed) std::reverse(out.begin(), out.end());
     return out;
 }
@@ -961,12 +1006,14 @@ std::vector<std::uint32_t> sew_by_arc_length(GarmentAssembly& io, std::span<cons
     auto param = [&](std::span<const std::uint32_t> line) {
         std::vector<double> t(line.size(), 0.0);
         for (std::size_t k = 1; k < line.size(); ++k) {
-            const double dx = double{io.x[line[k]]} - io.x[line[k - 1]], dy = double{io.y[line[k]]} - io.y[line[k - 1]],
+            const double dx = double{io.x[line[k]]} - io.x[line[k - 1]],
+                         dy = double{io.y[line[k]]} - io.y[line[k - 1]],
                          dz = double{io.z[line[k]]} - io.z[line[k - 1]];
             t[k] = t[k - 1] + std::sqrt(dx * dx + dy * dy + dz * dz);
         }
         if (t.back() > 0)
-            for (double& v : t) v /= t.back();
+            for (double& v : t)
+                v /= t.back();
         return t;
     };
     const std::vector<double> ta = param(a), tb = param(b);
@@ -980,7 +1027,8 @@ std::vector<std::uint32_t> sew_by_arc_length(GarmentAssembly& io, std::span<cons
     };
     std::unordered_set<std::uint64_t> joined;
     joined.reserve(io.edges.size() + a.size() + b.size());
-    for (const Edge& e : io.edges) joined.insert(pair_key(e.a, e.b));
+    for (const Edge& e : io.edges)
+        joined.insert(pair_key(e.a, e.b));
     std::vector<std::uint32_t> added;
     auto join = [&](std::uint32_t p, std::uint32_t q) {
         if (p == q || !joined.insert(pair_key(p, q)).second) return;
