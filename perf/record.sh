@@ -11,7 +11,7 @@
 #   speedscope.html      offline interactive viewer (speedscope) with this profile preloaded
 # Builds the `profile` CMake preset (-O3 -g, frame pointers) in build/profile first when needed.
 #
-# Usage: perf/record.sh [--size N] [--threads T] [--steps S] [--call-graph dwarf|fp] [--freq HZ] [--event EV]
+# Usage: perf/record.sh [--size N] [--threads T] [--steps S] [--call-graph dwarf[,BYTES]|fp] [--freq HZ] [--event EV]
 #                       [--no-stat] [-- DRAPE_RUN_ARGS...]
 # Environment (same meaning, flags win): DRAPE_SIZE (316), DRAPE_THREADS (2), DRAPE_STEPS (3000), CALL_GRAPH (dwarf),
 # PERF_FREQ (4000), PERF_EVENT (cpu-clock), PERF_STAT (1; 0 = skip the counter run), JOBS (build jobs, 1),
@@ -51,7 +51,7 @@ need_uint --size "$size"
 need_uint --threads "$threads"
 need_uint --steps "$steps"
 need_uint --freq "$freq"
-case "$call_graph" in dwarf | fp) ;; *) die "--call-graph must be 'dwarf' or 'fp' (got '$call_graph')" ;; esac
+case "$call_graph" in dwarf | dwarf,[0-9]* | fp) ;; *) die "--call-graph must be dwarf, dwarf,STACK_BYTES or fp (got '$call_graph')" ;; esac
 
 # --- perf itself ------------------------------------------------------------------------------------------------------
 need_cmd perf "apt-get install linux-perf"
@@ -62,9 +62,9 @@ if [[ "$(id -u)" != 0 ]]; then
         die "kernel.perf_event_paranoid is $paranoid: unprivileged perf is disabled. Run as root, or allow it with
     sudo sysctl -w kernel.perf_event_paranoid=1    (2 also works: user-space samples only)"
     elif ((paranoid == 2)); then
-        say "kernel.perf_event_paranoid is 2: recording user space only (cpu-clock:u). For kernel frames too:"
-        say "    sudo sysctl -w kernel.perf_event_paranoid=1"
         [[ "$event" == *:* ]] || event="$event:u"
+        say "kernel.perf_event_paranoid is 2: recording user space only ($event). For kernel frames too:"
+        say "    sudo sysctl -w kernel.perf_event_paranoid=1"
     fi
 fi
 need_cmd cmake "scripts/setup.sh (or apt-get install cmake build-essential)"
@@ -149,7 +149,7 @@ say "writing report.txt"
         awk '!/\[\.\] (_mm[0-9]*_|xsimd::|drape::simd::)/ && n++ < 45'
     echo
     echo "=== 3. Inside the fused substep kernel: samples by innermost inlined drape function ==="
-    if [[ "$call_graph" == dwarf ]]; then
+    if [[ "$call_graph" == dwarf* ]]; then
         awk -f "$ROOT/perf/fused_breakdown.awk" "$OUT/perf.script.txt"
     else
         echo "(needs --call-graph dwarf: frame-pointer stacks carry no inlined frames)"
