@@ -31,8 +31,15 @@ double ms_since(clock_type::time_point t) {
 
 Viewer* viewer_of(GLFWwindow* w) { return static_cast<Viewer*>(glfwGetWindowUserPointer(w)); }
 
-void mouse_button_cb(GLFWwindow* w, int button, int action, int mods) { viewer_of(w)->on_mouse_button(button, action, mods); }
-void cursor_cb(GLFWwindow* w, double x, double y) { viewer_of(w)->on_cursor(x, y); }
+// With --demo-grab the script owns the mouse: real pointer events (Xvfb's pointer sits somewhere) are ignored.
+bool scripted_mouse = false;
+
+void mouse_button_cb(GLFWwindow* w, int button, int action, int mods) {
+    if (!scripted_mouse) viewer_of(w)->on_mouse_button(button, action, mods);
+}
+void cursor_cb(GLFWwindow* w, double x, double y) {
+    if (!scripted_mouse) viewer_of(w)->on_cursor(x, y);
+}
 void scroll_cb(GLFWwindow* w, double, double dy) { viewer_of(w)->on_scroll(dy); }
 void key_cb(GLFWwindow* w, int key, int, int action, int mods) { viewer_of(w)->on_key(key, action, mods); }
 
@@ -50,6 +57,7 @@ double median(std::vector<double> v) {
 
 Viewer::Viewer(const ViewOptions& options) : options_(options) {
     show_ui_ = options.ui;
+    scripted_mouse = options.demo_grab;
     full_mesh_ = options.full_mesh;
     window_ = render::open_window(options.width, options.height, "drape - cloth viewer", true);
     glfwSwapInterval(options.vsync ? 1 : 0);
@@ -337,7 +345,7 @@ void Viewer::update_hover() {
 
 void Viewer::run_demo_script() {
     // --demo-grab: half-way through --frames, press on the free corner (N-1, N-1) through the real picking path,
-    // drag it up and towards the viewer over 60 frames, and hold it there until the end.
+    // drag it up and a little to the right over 60 frames, and hold it there until the end.
     if (!options_.demo_grab || options_.frames == 0) return;
     const std::uint64_t grab_frame = options_.frames / 2, drag_frames = 60;
     const std::uint64_t f = frame_index_;
@@ -348,8 +356,8 @@ void Viewer::run_demo_script() {
     if (f == grab_frame) {
         const Simulation& sim = session_->sim();
         const std::size_t n = session_->size();
-        const std::size_t corner = grid_index(static_cast<std::uint32_t>(n), static_cast<std::uint32_t>(n - 1),
-                                              static_cast<std::uint32_t>(n - 1));
+        const auto last = static_cast<std::uint32_t>(n - 1);
+        const std::size_t corner = grid_index(static_cast<std::uint32_t>(n), last, last);
         const Eigen::Vector4f clip =
             view_projection() * Eigen::Vector4f(sim.x()[corner], sim.y()[corner], sim.z()[corner], 1.0f);
         start_x = (clip.x() / clip.w() + 1.0) * 0.5 * w;
@@ -358,11 +366,13 @@ void Viewer::run_demo_script() {
         drag_ = Drag::none;
         const PickHit hit = pick_at(start_x, start_y);
         if (hit.hit()) start_grab(hit, start_x, start_y);
+        std::fprintf(stderr, "demo-grab: corner %zu at pixel (%.0f, %.0f) -> picked %zu\n", corner, start_x, start_y,
+                     hit.index);
         return;
     }
     const double t = std::min(1.0, double(f - grab_frame) / double(drag_frames));
     const double s = t * t * (3.0 - 2.0 * t); // smooth start and stop
-    on_cursor(start_x + s * 0.16 * w, start_y - s * 0.30 * h);
+    on_cursor(start_x + s * 0.06 * w, start_y - s * 0.22 * h);
 }
 
 void Viewer::draw_scene() {

@@ -62,7 +62,7 @@ double ViewSession::bound_for(const FabricSettings& f, float air_drag) const {
     HangParams probe = hang_;
     probe.n = std::min<std::uint32_t>(size_, 8);
     probe.total_mass = f.node_mass_g * 1e-3f * float(probe.n * probe.n);
-    probe.pin_corners = false;
+    probe.pins = drape::GridPins::none;
     SceneBuild s = build_hang_scene(probe);
     apply_materials(s.cloth, materials(f));
     return stability_bound(s.cloth, air_drag).dt_max;
@@ -102,7 +102,7 @@ void ViewSession::rebuild(bool keep_state) {
     hang_.damping_ratio = fabric_.damping_ratio;
     // Corners are pinned by the viewer after construction, not by the scene: pins the user made are then all
     // alike and any of them can be unpinned (an authored pin has no mass to restore).
-    hang_.pin_corners = false;
+    hang_.pins = drape::GridPins::none;
     SceneBuild scene = build_hang_scene(hang_);
     apply_materials(scene.cloth, materials(fabric_));
     spacing_ = hang_.size / float(size_ - 1);
@@ -321,6 +321,20 @@ void ViewSession::set_integrator(Integrator integrator) {
     sim_->set_params(p);
     params_ = p;
     post(MessageLevel::info, std::string("integrator: ") + integrator_name(integrator));
+}
+
+void ViewSession::set_strain_limit(const StrainLimit& limit) {
+    SimulationParams p = sim_->params();
+    p.strain_limit.ratio = std::clamp(limit.ratio, 0.0f, 10.0f);
+    p.strain_limit.passes = std::clamp<std::uint32_t>(limit.passes, 1, 100);
+    p.strain_limit.every = std::clamp<std::uint32_t>(limit.every, 1, 1000);
+    try {
+        sim_->set_params(p);
+    } catch (const InvalidInput& e) {
+        post(MessageLevel::warning, std::string("refused: ") + e.what());
+        return;
+    }
+    params_ = p;
 }
 
 void ViewSession::set_dt(double dt) {

@@ -97,6 +97,8 @@ class ViewSession {
     void set_wind(bool enabled, float strength);
     void set_air_drag(float drag);
     void set_integrator(Integrator integrator);
+    /// Provot strain limiting (ratio 0 = off); ranges as in drape/simulation.hpp.
+    void set_strain_limit(const StrainLimit& limit);
     /// Fixes dt (s) within (0, bound]; the panel cannot offer more than the bound.
     void set_dt(double dt);
     void set_auto_dt(bool on);

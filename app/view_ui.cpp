@@ -145,6 +145,20 @@ void Viewer::ui_panels() {
         const char* integrators[] = {"symplectic Euler", "Verlet"};
         if (ImGui::Combo("integrator", &integrator, integrators, 2))
             s.set_integrator(integrator == 1 ? Integrator::verlet : Integrator::symplectic_euler);
+        bool limit_on = p.strain_limit.ratio > 0.0f;
+        float limit_ratio = limit_on ? p.strain_limit.ratio : 0.1f;
+        int limit_every = static_cast<int>(p.strain_limit.every);
+        bool limit_changed = ImGui::Checkbox("strain limit", &limit_on);
+        ImGui::SameLine();
+        ImGui::PushItemWidth(112.0f);
+        limit_changed |= ImGui::SliderFloat("##limit", &limit_ratio, 0.01f, 1.0f, "%.2f stretch", log_flags);
+        ImGui::PopItemWidth();
+        help_marker("Provot 1995: springs stretched beyond (1 + ratio) x rest length are pulled back after the "
+                    "substep (4 passes over the colour groups).");
+        if (limit_on) limit_changed |= ImGui::SliderInt("limit every", &limit_every, 1, 1000, "%d substeps", log_flags);
+        if (limit_changed)
+            s.set_strain_limit({limit_on ? limit_ratio : 0.0f, p.strain_limit.passes,
+                                static_cast<std::uint32_t>(std::max(limit_every, 1))});
         float dt = p.dt;
         const float bound = static_cast<float>(s.dt_bound());
         if (ImGui::SliderFloat("dt", &dt, 1e-3f * bound, bound, "%.3e s", log_flags)) s.set_dt(dt);

@@ -220,9 +220,12 @@ void ClothRenderer::draw_markers(const Eigen::Matrix4f& view_projection, float p
                                  base_vertex());
         first += count;
     };
-    draw(pinned_count_, 10.0f, 1.0f, 0.82f, 0.15f);   // pinned: amber
-    draw(highlight_count_, 14.0f, 0.2f, 0.9f, 1.0f);  // grabbed: cyan
-    draw(hover_count_, 9.0f, 0.95f, 0.95f, 0.95f);    // under the cursor: white
+    draw(pinned_count_, 10.0f, 1.0f, 0.82f, 0.15f); // pinned: amber
+    // The grabbed and hovered particles are shown even behind a fold, like a cursor.
+    glDisable(GL_DEPTH_TEST);
+    draw(highlight_count_, 14.0f, 0.2f, 0.9f, 1.0f); // grabbed: cyan
+    draw(hover_count_, 9.0f, 0.95f, 0.95f, 0.95f);   // under the cursor: white
+    glEnable(GL_DEPTH_TEST);
     glVertexArrayElementBuffer(vao_, index_buffer_);
 }
 

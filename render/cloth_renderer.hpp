@@ -36,7 +36,7 @@ struct Shading {
     float diffuse = 0.85f;           ///< kd [0, 1]
     float specular = 0.25f;          ///< ks [0, 1]
     float shininess = 32.0f;         ///< Blinn-Phong exponent [1, 512]
-    Eigen::Vector3f light_position{1.6f, 2.4f, 2.2f}; ///< m, world space
+    Eigen::Vector3f light_position{1.1f, 0.7f, 1.3f}; ///< m, world space
     float light_intensity = 1.0f;                    ///< [0, 4]
     bool checker = true; ///< faint checker pattern on grid cloths (shows the shape while it moves)
 };

@@ -1,0 +1,172 @@
+#!/usr/bin/env python3
+"""Viewer smoke test: runs the real viewer under Xvfb for a few frames of the default scene, saves a screenshot and
+checks the image and the --stats-json object.
+
+Image checks (the PNG is decoded here with zlib alone, no imaging library):
+  * not blank: many distinct colours and a real spread of brightness;
+  * the cloth covers a plausible share of the frame: pixels of the cloth's front (red) or back (beige) colour make up
+    between 1% and 60% of the image;
+  * the shading varies: over the cloth pixels, the brightness spans a real range (lighting, not a flat fill).
+Exit 0 on success, 1 with a message naming the failed check.
+
+Usage: viewer_smoke.py --drape build/release/drape [--keep DIR]
+"""
+import argparse
+import json
+import os
+import shutil
+import struct
+import subprocess
+import sys
+import tempfile
+import zlib
+
+
+def read_png(path):
+    """Decodes an 8-bit RGB or RGBA PNG (what stb_image_write produces) into (width, height, rows of RGB tuples)."""
+    data = open(path, "rb").read()
+    if data[:8] != b"\x89PNG\r\n\x1a\n":
+        raise ValueError(f"{path} is not a PNG")
+    pos, idat, width, height, channels = 8, b"", 0, 0, 0
+    while pos < len(data):
+        length, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + length]
+        pos += 12 + length
+        if kind == b"IHDR":
+            width, height, depth, colour, _, _, interlace = struct.unpack(">IIBBBBB", body)
+            if depth != 8 or colour not in (2, 6) or interlace:
+                raise ValueError(f"unsupported PNG (depth {depth}, colour type {colour}, interlace {interlace})")
+            channels = 3 if colour == 2 else 4
+        elif kind == b"IDAT":
+            idat += body
+        elif kind == b"IEND":
+            break
+    raw = zlib.decompress(idat)
+    stride = width * channels
+    rows, prev = [], bytearray(stride)
+    for y in range(height):
+        f = raw[y * (stride + 1)]
+        line = bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - channels] if i >= channels else 0
+            b = prev[i]
+            c = prev[i - channels] if i >= channels else 0
+            if f == 1:
+                line[i] = (line[i] + a) & 255
+            elif f == 2:
+                line[i] = (line[i] + b) & 255
+            elif f == 3:
+                line[i] = (line[i] + (a + b) // 2) & 255
+            elif f == 4:
+                p = a + b - c
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                pred = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
+                line[i] = (line[i] + pred) & 255
+        rows.append(line)
+        prev = line
+    return width, height, rows, channels
+
+
+def is_cloth(r, g, b):
+    # Front: red (sRGB ~ (0.78, 0.20, 0.17) lit); back: beige (~ (0.93, 0.80, 0.55) lit).
+    red = r > 40 and r > 1.6 * g and r > 1.6 * b
+    beige = r > 90 and g > 0.62 * r and b < 0.85 * g and r > b + 35
+    return red or beige
+
+
+def luminance(r, g, b):
+    return 0.2126 * r + 0.7152 * g + 0.0722 * b
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--drape", required=True)
+    ap.add_argument("--frames", type=int, default=30)
+    ap.add_argument("--keep", help="copy the screenshot here")
+    args = ap.parse_args()
+
+    xvfb = shutil.which("xvfb-run")
+    if not xvfb:
+        print("FAIL: xvfb-run not found; scripts/setup.sh installs xvfb (Debian package 'xvfb')")
+        return 1
+    tmp = tempfile.mkdtemp(prefix="drape_smoke_")
+    shot = os.path.join(tmp, "viewer.png")
+    cmd = [xvfb, "-a", "-s", "-screen 0 1600x1000x24", args.drape, "view", "--frames", str(args.frames),
+           "--screenshot", shot, "--stats-json", "--no-vsync"]
+    print("running:", " ".join(cmd))
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    sys.stderr.write(proc.stderr)
+    if proc.returncode != 0:
+        print(f"FAIL: the viewer exited with {proc.returncode}")
+        return 1
+
+    # --stats-json: exactly one JSON object with the documented fields.
+    lines = [l for l in proc.stdout.splitlines() if l.strip()]
+    if len(lines) != 1:
+        print(f"FAIL: expected one JSON line on stdout, got {len(lines)}: {proc.stdout!r}")
+        return 1
+    stats = json.loads(lines[0])
+    for key in ("fps", "frame_ms", "particles", "springs", "substeps_per_frame", "threads"):
+        if key not in stats:
+            print(f"FAIL: stats JSON lacks '{key}': {stats}")
+            return 1
+    for key in ("sim", "publish", "draw"):
+        if not isinstance(stats["frame_ms"].get(key), (int, float)) or stats["frame_ms"][key] < 0:
+            print(f"FAIL: frame_ms.{key} missing or negative: {stats['frame_ms']}")
+            return 1
+    if not (stats["fps"] > 0 and stats["particles"] == 64 * 64 and stats["springs"] > 0 and
+            stats["substeps_per_frame"] >= 1 and stats["threads"] >= 1 and stats.get("finite", True)):
+        print(f"FAIL: implausible stats: {stats}")
+        return 1
+    print(f"ok: stats {json.dumps(stats)}")
+
+    # The image.
+    if not os.path.exists(shot):
+        print(f"FAIL: no screenshot written at {shot}")
+        return 1
+    width, height, rows, ch = read_png(shot)
+    if (width, height) != tuple(stats.get("framebuffer", (width, height))):
+        print(f"FAIL: screenshot {width}x{height} differs from the framebuffer {stats.get('framebuffer')}")
+        return 1
+    colours, lum, cloth_lum = set(), [], []
+    step = 2  # every other pixel in each direction: plenty for these statistics, 4x faster
+    for y in range(0, height, step):
+        row = rows[y]
+        for x in range(0, width, step):
+            r, g, b = row[x * ch], row[x * ch + 1], row[x * ch + 2]
+            colours.add((r >> 2, g >> 2, b >> 2))
+            l = luminance(r, g, b)
+            lum.append(l)
+            if is_cloth(r, g, b):
+                cloth_lum.append(l)
+    n = len(lum)
+    mean = sum(lum) / n
+    std = (sum((v - mean) ** 2 for v in lum) / n) ** 0.5
+    share = len(cloth_lum) / n
+    print(f"image {width}x{height}: {len(colours)} distinct colours, brightness mean {mean:.1f} std {std:.1f}, "
+          f"cloth {100 * share:.1f}% of the pixels")
+    if len(colours) < 50 or std < 5.0:
+        print("FAIL: the screenshot is blank or nearly uniform")
+        return 1
+    if not (0.01 <= share <= 0.60):
+        print(f"FAIL: the cloth covers {100 * share:.2f}% of the image; expected 1%..60%")
+        return 1
+    cloth_lum.sort()
+    lo = cloth_lum[int(0.05 * len(cloth_lum))]
+    hi = cloth_lum[int(0.95 * len(cloth_lum)) - 1]
+    cm = sum(cloth_lum) / len(cloth_lum)
+    cstd = (sum((v - cm) ** 2 for v in cloth_lum) / len(cloth_lum)) ** 0.5
+    print(f"cloth brightness: 5th-95th percentile {lo:.1f}..{hi:.1f}, std {cstd:.1f}")
+    if hi - lo < 8.0 or cstd < 2.0:
+        print("FAIL: the cloth's shading does not vary (flat fill?)")
+        return 1
+    if args.keep:
+        os.makedirs(args.keep, exist_ok=True)
+        shutil.copy(shot, os.path.join(args.keep, "viewer_smoke.png"))
+    shutil.rmtree(tmp, ignore_errors=True)
+    print("PASS: viewer smoke test")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
