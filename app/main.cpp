@@ -43,10 +43,12 @@ int main(int argc, char** argv) {
     drape::app::RunOptions run;
     CLI::App* cmd = app.add_subcommand("run", "Headless run of a scene; prints its figures (use --json for one "
                                               "machine-readable object).");
-    cmd->add_option("--scene", run.scene, "Scene to run")->check(CLI::IsMember({"hang"}))->capture_default_str();
-    cmd->add_option("--size", run.size, "Particles per side N (N x N particles)")
-        ->check(in_range<std::uint32_t>(drape::hang_min_n, drape::hang_max_n))
+    cmd->add_option("--scene", run.scene,
+                    "Built-in scene (hang, drape, sphere, flag, tshirt) or a scene file (.json, docs/scene_format.md)")
         ->capture_default_str();
+    cmd->add_option("--size", run.size,
+                    "Grid scenes: particles per side N (N x N); tshirt: cells per metre [default: the scene's]")
+        ->check(in_range<std::uint32_t>(drape::hang_min_n, drape::hang_max_n));
     cmd->add_option("--threads", run.threads, "Worker threads (default: all hardware threads)")
         ->check(in_range<int>(1, 256));
     auto* steps = cmd->add_option("--steps", run.steps, "Substeps (integration steps of size dt) to run [default 1000]")
@@ -56,34 +58,33 @@ int main(int argc, char** argv) {
     steps->excludes(secs);
     cmd->add_option("--dt", run.dt, "Substep in seconds (default: 0.9 x the explicit stability bound)")
         ->check(in_range<double>(1e-9, 0.1, " s"));
-    cmd->add_option("--integrator", run.integrator, "Time integrator")
-        ->check(CLI::IsMember({"euler", "verlet"}))
-        ->capture_default_str();
-    cmd->add_option("--stiffness", run.stiffness, "Structural spring stiffness k in N/m (shear 0.5 k, bend 0.1 k)")
-        ->check(in_range<float>(100.0f, 25000.0f, " N/m"))
-        ->capture_default_str();
-    cmd->add_option("--damping", run.damping, "Spring damping as a fraction of critical damping")
-        ->check(in_range<float>(0.0f, 1.0f))
-        ->capture_default_str();
-    cmd->add_option("--drag", run.drag, "Air drag kr in 1/s (F = -m kr v)")
-        ->check(in_range<float>(0.0f, 100.0f, " 1/s"))
-        ->capture_default_str();
+    cmd->add_option("--integrator", run.integrator, "Time integrator: euler or verlet [default: the scene's]")
+        ->check(CLI::IsMember({"euler", "verlet"}));
+    cmd->add_option("--stiffness", run.stiffness,
+                    "Structural spring stiffness k in N/m (shear and bend follow the scene's ratios) [scene: 1000]")
+        ->check(in_range<float>(100.0f, 25000.0f, " N/m"));
+    cmd->add_option("--damping", run.damping, "Spring damping as a fraction of critical damping [scene's]")
+        ->check(in_range<float>(0.0f, 1.0f));
+    cmd->add_option("--drag", run.drag, "Air drag kr in 1/s (F = -m kr v) [scene's]")
+        ->check(in_range<float>(0.0f, 100.0f, " 1/s"));
     cmd->add_flag("--wind", run.wind, "Enable seed 000's analytic wind field");
-    cmd->add_option("--wind-strength", run.wind_strength, "Wind amplitude in m/s^2")
-        ->check(in_range<float>(0.0f, 100.0f, " m/s^2"))
-        ->capture_default_str();
+    cmd->add_option("--wind-strength", run.wind_strength, "Wind amplitude in m/s^2 [scene's, 2]")
+        ->check(in_range<float>(0.0f, 100.0f, " m/s^2"));
     cmd->add_option("--kernel", run.kernel, "Spring kernel: grid stencil, general CSR, or auto")
         ->check(CLI::IsMember({"auto", "grid", "csr"}))
         ->capture_default_str();
     cmd->add_option("--strain-limit", run.strain_limit,
                     "Provot strain limiting: largest stretch of structural, shear and seam springs (0.1 = 10%; 0 = off)")
-        ->check(in_range<float>(0.0f, 10.0f))
-        ->capture_default_str();
-    cmd->add_option("--strain-passes", run.strain_passes, "Strain-limiting sweeps over all colour groups per substep")
-        ->check(in_range<std::uint32_t>(1, 100))
-        ->capture_default_str();
-    cmd->add_option("--strain-every", run.strain_every, "Run strain limiting after every K-th substep")
-        ->check(in_range<std::uint32_t>(1, 1000))
+        ->check(in_range<float>(0.0f, 10.0f));
+    cmd->add_option("--strain-passes", run.strain_passes, "Strain-limiting sweeps over all colour groups [scene's, 4]")
+        ->check(in_range<std::uint32_t>(1, 100));
+    cmd->add_option("--strain-every", run.strain_every, "Run strain limiting after every K-th substep [scene's, 1]")
+        ->check(in_range<std::uint32_t>(1, 1000));
+    auto* obj = cmd->add_option("--export-obj", run.export_obj,
+                                "Write OBJ frames (vertices, normals, faces) into this directory");
+    cmd->add_option("--every", run.export_every, "Substeps between exported OBJ frames")
+        ->check(in_range<std::uint32_t>(1, 1'000'000'000))
+        ->needs(obj)
         ->capture_default_str();
     cmd->add_flag("--staged", run.staged, "Run each stage as its own pass instead of the fused pass");
     cmd->add_flag("--json", run.json, "Print exactly one JSON object on stdout");
@@ -123,8 +124,6 @@ int main(int argc, char** argv) {
                        "At exit, print one JSON object: fps (median), frame_ms {sim, publish, draw}, particles, ...");
     bool no_ui = false;
     view_cmd->add_flag("--no-ui", no_ui, "Hide the panels and the stats overlay (Tab toggles them)");
-    view_cmd->add_flag("--full-mesh", view.full_mesh,
-                       "Draw every triangle (default: grids finer than 256 x 256 are drawn at a coarser level of detail)");
     view_cmd->add_flag("--full-mesh", view.full_mesh,
                        "Draw every triangle (default: grids finer than 256 x 256 are drawn at a coarser level of detail)");
     // Hidden automation hooks (documentation screenshots and tests).

@@ -13,7 +13,8 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
-#include "drape/scene_hang.hpp"
+#include "drape/scene.hpp"
+#include "obj_export.hpp"
 #include "drape/simulation.hpp"
 #include "drape/stability.hpp"
 
@@ -63,23 +64,46 @@ int run_command(const RunOptions& o) {
     const int threads = o.threads > 0 ? o.threads : hardware;
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
 
-    HangParams hp;
-    hp.n = o.size;
-    hp.stiffness = o.stiffness;
-    hp.damping_ratio = o.damping;
-    SceneBuild scene = build_hang_scene(hp);
+    // The scene, with the flags the user gave overriding its values.
+    SceneSpec spec;
+    try {
+        spec = load_scene(o.scene);
+    } catch (const InvalidInput& e) {
+        throw InvalidInput(std::string("--scene: ") + e.what());
+    }
+    if (o.size) {
+        if (spec.cloth == ClothType::grid) {
+            if (*o.size < hang_min_n || *o.size > hang_max_n)
+                throw InvalidInput("--size: value " + std::to_string(*o.size) + " is outside the allowed range [" +
+                                   std::to_string(hang_min_n) + ", " + std::to_string(hang_max_n) + "]");
+            spec.grid.n = *o.size;
+        } else {
+            if (*o.size < 10 || *o.size > 1000)
+                throw InvalidInput("--size: value " + std::to_string(*o.size) +
+                                   " is outside the allowed range [10, 1000] (cells per metre of the T-shirt)");
+            spec.tshirt.cells_per_metre = static_cast<float>(*o.size);
+        }
+    }
+    if (o.stiffness) spec.stiffness = *o.stiffness;
+    if (o.damping) spec.damping_ratio = *o.damping;
+    if (o.drag) spec.physics.air_drag = *o.drag;
+    if (o.integrator) spec.physics.integrator = *o.integrator == "verlet" ? Integrator::verlet : Integrator::symplectic_euler;
+    if (o.wind) spec.physics.wind.enabled = true;
+    if (o.wind_strength) spec.physics.wind.strength = *o.wind_strength;
+    if (o.strain_limit) spec.physics.strain_limit.ratio = *o.strain_limit;
+    if (o.strain_passes) spec.physics.strain_limit.passes = *o.strain_passes;
+    if (o.strain_every) spec.physics.strain_limit.every = *o.strain_every;
+    spec.physics.kernel = o.kernel == "grid" ? KernelPath::grid : o.kernel == "csr" ? KernelPath::csr : KernelPath::automatic;
+    spec.physics.fused = !o.staged;
+    if (o.dt) spec.dt = static_cast<float>(*o.dt);
+    const std::size_t expected = scene_particle_count(spec);
+    if (expected > (std::size_t{1} << 24))
+        throw InvalidInput("--size: the cloth would have " + std::to_string(expected) + " particles (at most 16,777,216)");
 
-    SimulationParams sp;
-    sp.integrator = o.integrator == "verlet" ? Integrator::verlet : Integrator::symplectic_euler;
-    sp.air_drag = o.drag;
-    sp.wind.enabled = o.wind;
-    sp.wind.strength = o.wind_strength;
-    sp.kernel = o.kernel == "grid" ? KernelPath::grid : o.kernel == "csr" ? KernelPath::csr : KernelPath::automatic;
-    sp.fused = !o.staged;
-    sp.strain_limit = {o.strain_limit, o.strain_passes, o.strain_every};
+    BuiltScene scene = build_scene(spec);
+    SimulationParams sp = scene.params;
     const StabilityBound bound = stability_bound(scene.cloth, sp.air_drag);
-    const bool dt_default = !o.dt.has_value();
-    sp.dt = static_cast<float>(dt_default ? 0.9 * bound.dt_max : *o.dt);
+    const bool dt_default = !spec.dt.has_value();
 
     std::uint64_t steps = 1000;
     if (o.steps) steps = *o.steps;
@@ -90,18 +114,26 @@ int run_command(const RunOptions& o) {
 
     Simulation sim(std::move(scene.cloth), scene.initial, sp);
     const std::size_t particles = sim.cloth().particle_count;
+    std::unique_ptr<ObjExporter> exporter;
+    std::size_t frames_written = 0;
+    if (o.export_obj) {
+        exporter = std::make_unique<ObjExporter>(sim.cloth(), *o.export_obj);
+        exporter->write(sim, frames_written++);
+    }
 
     std::string error;
     Progress progress(steps);
     const auto start = clock_type::now();
     try {
         // Chunks of ~1e7 particle-substeps keep progress reports cheap and responsive.
-        const std::uint64_t chunk = std::max<std::uint64_t>(1, 10'000'000 / particles);
+        const std::uint64_t chunk =
+            exporter ? o.export_every : std::max<std::uint64_t>(1, 10'000'000 / particles);
         for (std::uint64_t done = 0; done < steps;) {
             const std::uint64_t n = std::min(chunk, steps - done);
             sim.step(n);
             done += n;
             progress.update(done);
+            if (exporter && (done % o.export_every == 0 || done == steps)) exporter->write(sim, frames_written++);
         }
     } catch (const SimulationError& e) {
         error = e.what();
@@ -112,8 +144,11 @@ int run_command(const RunOptions& o) {
     const double rate = wall > 0.0 ? double(particles) * double(done) / wall : 0.0;
 
     nlohmann::ordered_json j;
-    j["scene"] = o.scene;
-    j["n"] = o.size;
+    j["scene"] = spec.name;
+    if (spec.cloth == ClothType::grid)
+        j["n"] = spec.grid.n;
+    else
+        j["cells_per_metre"] = spec.tshirt.cells_per_metre;
     j["particles"] = particles;
     j["springs"] = sim.cloth().spring_count();
     j["threads"] = threads;
@@ -126,11 +161,15 @@ int run_command(const RunOptions& o) {
     j["integrator"] = integrator_name(sp.integrator);
     j["kernel"] = kernel_path_name(sim.kernel());
     j["fused"] = sp.fused;
-    j["stiffness"] = o.stiffness;
-    j["wind"] = o.wind;
-    j["strain_limit"] = o.strain_limit;
-    j["strain_passes"] = o.strain_passes;
-    j["strain_every"] = o.strain_every;
+    j["stiffness"] = spec.stiffness;
+    j["wind"] = sp.wind.enabled;
+    j["strain_limit"] = sp.strain_limit.ratio;
+    j["strain_passes"] = sp.strain_limit.passes;
+    j["strain_every"] = sp.strain_limit.every;
+    j["colliders"] = sp.colliders.size();
+    j["seam_springs"] = sim.cloth().seams.a.size();
+    j["seam_colours"] = sim.cloth().seams.groups.colour_count;
+    if (exporter) j["obj_frames"] = frames_written;
     j["wall_seconds"] = wall;
     j["particle_substeps_per_second"] = rate;
     j["stages"] = sim.stage_names();
@@ -143,8 +182,8 @@ int run_command(const RunOptions& o) {
     if (o.json) {
         std::cout << j.dump() << std::endl;
     } else {
-        std::printf("drape run: scene %s, %zu particles (%u x %u), %zu springs, %d thread(s), kernel %s%s\n",
-                    o.scene.c_str(), particles, o.size, o.size, sim.cloth().spring_count(), threads,
+        std::printf("drape run: scene %s, %zu particles, %zu springs, %d thread(s), kernel %s%s\n",
+                    spec.name.c_str(), particles, sim.cloth().spring_count(), threads,
                     kernel_path_name(sim.kernel()), sp.fused ? " (fused)" : " (staged)");
         std::printf("  integrator %s, dt %.4g s (%s; bound %.4g s), %llu substeps = %.4g s simulated\n",
                     integrator_name(sp.integrator), double(sp.dt), dt_default ? "default" : "--dt", bound.dt_max,

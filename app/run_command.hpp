@@ -7,24 +7,27 @@
 
 namespace drape::app {
 
+/// Flags of `drape run`. Unset optionals keep the scene's own value.
 struct RunOptions {
-    std::string scene = "hang";
-    std::uint32_t size = 100;
-    int threads = 0; ///< 0 = all hardware threads
+    std::string scene = "hang"; ///< built-in name or path to a .json scene file
+    std::optional<std::uint32_t> size; ///< grid cloths: particles per side; tshirt: cells per metre
+    int threads = 0;                   ///< 0 = all hardware threads
     std::optional<std::uint64_t> steps;
     std::optional<double> sim_seconds;
     std::optional<double> dt;
-    std::string integrator = "euler";
-    float stiffness = 1000.0f;
-    float damping = 0.05f;
-    float drag = 0.2f;
+    std::optional<std::string> integrator;
+    std::optional<float> stiffness;
+    std::optional<float> damping;
+    std::optional<float> drag;
     bool wind = false;
-    float wind_strength = 2.0f;
+    std::optional<float> wind_strength;
     std::string kernel = "auto";
     bool staged = false;
-    float strain_limit = 0.0f;
-    std::uint32_t strain_passes = 4;
-    std::uint32_t strain_every = 1;
+    std::optional<float> strain_limit;
+    std::optional<std::uint32_t> strain_passes;
+    std::optional<std::uint32_t> strain_every;
+    std::optional<std::string> export_obj; ///< directory for OBJ frames
+    std::uint32_t export_every = 100;      ///< substeps between exported frames
     bool json = false;
 };
 

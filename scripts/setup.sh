@@ -8,7 +8,7 @@ packages=(
   libeigen3-dev libtbb-dev libxsimd-dev
   libglfw3-dev python3-glad libgl-dev libgl1-mesa-dri
   libbenchmark-dev libgtest-dev
-  libimgui-dev nlohmann-json3-dev libcli11-dev libstb-dev
+  libimgui-dev nlohmann-json3-dev libcli11-dev libstb-dev libtinyobjloader-dev
   xvfb xauth mesa-utils
   python3-matplotlib
 )

@@ -41,6 +41,35 @@ expect_error "--kernel" run --kernel gpu
 expect_error "--foo" run --foo
 expect_error "bogus" bogus
 
+# Broken scene files: exit 2, one line naming the file and the JSON path.
+tmpdir=$(mktemp -d)
+trap 'rm -f "$err" "$out"; rm -rf "$tmpdir"' EXIT
+echo '{"cloth": {"n": 3000000}}' >"$tmpdir/huge.json"
+echo '{"cloth": {"n": 10, "colour": 1}}' >"$tmpdir/unknown.json"
+echo '{"cloth": ' >"$tmpdir/malformed.json"
+expect_error "cloth.n" run --scene "$tmpdir/huge.json"
+expect_error "cloth.colour is not a known field" run --scene "$tmpdir/unknown.json"
+expect_error "malformed JSON" run --scene "$tmpdir/malformed.json"
+expect_error "cannot open" run --scene "$tmpdir/missing.json"
+expect_error "--every" run --every 5
+expect_error "[10, 1000]" run --scene tshirt --size 5
+
+# Every built-in scene runs and reports; OBJ frames are written.
+for scene in hang drape sphere flag tshirt; do
+    if ! "$DRAPE" run --scene "$scene" --steps 20 --json >"$out" 2>"$err"; then
+        echo "FAIL: scene $scene"; cat "$err"; fail=1
+    else
+        echo "ok: scene $scene -> $(python3 -c "import json; j=json.load(open('$out')); print(j['particles'], 'particles', '+'.join(j['stages']))")"
+    fi
+done
+"$DRAPE" run --scene sphere --steps 30 --export-obj "$tmpdir/obj" --every 10 --json >"$out" 2>"$err" || { echo "FAIL: --export-obj"; cat "$err"; fail=1; }
+frames=$(ls "$tmpdir/obj" | wc -l)
+if [ "$frames" != 4 ] || ! grep -q "^f " "$tmpdir/obj/frame_00003.obj"; then
+    echo "FAIL: --export-obj wrote $frames frames (expected 4: initial + 3)"; fail=1
+else
+    echo "ok: --export-obj -> $frames frames"
+fi
+
 # --json: exactly one JSON object with the BENCH.md fields.
 if ! "$DRAPE" run --scene hang --size 40 --threads 2 --steps 50 --json >"$out" 2>"$err"; then
     echo "FAIL: --json run exited non-zero"; cat "$err"; fail=1

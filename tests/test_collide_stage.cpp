@@ -21,7 +21,7 @@ TEST_P(CollideDrop, NoParticleInsideAfterAnySubstep) {
     HangParams hp;
     hp.n = 40;
     hp.size = 1.2f;
-    hp.pin_corners = false;
+    hp.pins = GridPins::none;
     SceneBuild scene = build_hang_scene(hp);
     for (float& y : scene.initial.y) y = 0.5f; // start above the collider
     SimulationParams p = drape::testing::default_params(scene.cloth, c.integ);

@@ -61,7 +61,7 @@ INSTANTIATE_TEST_SUITE_P(Integrators, Oscillator, ::testing::Values(Integrator::
 TEST(Physics, FreeFallFollowsTheDiscreteParabola) {
     HangParams hp;
     hp.n = 10;
-    hp.pin_corners = false;
+    hp.pins = GridPins::none;
     SceneBuild scene = build_hang_scene(hp);
     SimulationParams p = drape::testing::default_params(scene.cloth);
     p.air_drag = 0.0f;

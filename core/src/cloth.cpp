@@ -56,6 +56,23 @@ Cloth cook_cloth(std::span<const float> inv_mass, std::vector<Edge> edges,
     std::copy(inv_mass.begin(), inv_mass.end(), c.inv_mass.data());
     c.edges = std::move(edges);
     c.graph = build_spring_graph(n, c.padded_count, c.edges);
+    std::vector<std::uint32_t> seam_subset;
+    for (std::uint32_t k = 0; k < c.edges.size(); ++k)
+        if (c.edges[k].kind == SpringKind::seam) seam_subset.push_back(k);
+    if (!seam_subset.empty()) {
+        SeamSet& s = c.seams;
+        s.groups = colour_edges(c.edges, n, seam_subset);
+        for (std::uint32_t e : s.groups.edge_index) {
+            s.a.push_back(c.edges[e].a);
+            s.b.push_back(c.edges[e].b);
+            s.rest.push_back(c.edges[e].rest);
+            s.kind.push_back(c.edges[e].kind);
+            s.particles.push_back(c.edges[e].a);
+            s.particles.push_back(c.edges[e].b);
+        }
+        std::sort(s.particles.begin(), s.particles.end());
+        s.particles.erase(std::unique(s.particles.begin(), s.particles.end()), s.particles.end());
+    }
     apply_materials(c, material);
     return c;
 }

@@ -413,7 +413,7 @@ std::vector<Collider> default_body(ColliderSurface s) {
     return {
         make_ellipsoid({0.0f, 0.0f, 0.0f}, {0.16f, 0.30f, 0.10f}, s),      // torso
         make_ellipsoid({0.0f, -0.30f, 0.0f}, {0.17f, 0.15f, 0.11f}, s),    // hips
-        make_ellipsoid({0.0f, 0.22f, 0.0f}, {0.21f, 0.07f, 0.09f}, s),     // shoulders
+        make_ellipsoid({0.0f, 0.22f, 0.0f}, {0.19f, 0.06f, 0.08f}, s),     // shoulders
         make_ellipsoid({0.0f, 0.34f, 0.0f}, {0.05f, 0.07f, 0.05f}, s),     // neck
         make_ellipsoid({0.0f, 0.48f, 0.0f}, {0.08f, 0.11f, 0.09f}, s),     // head
         make_ellipsoid({-0.40f, 0.22f, 0.0f}, {0.22f, 0.045f, 0.045f}, s), // right arm (x < 0)

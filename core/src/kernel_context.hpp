@@ -67,6 +67,11 @@ struct StepContext {
     float wind_strength; ///< m/s^2
     float wind_phase;    ///< 10 t, rad
 
+    // Seam forces (N) per particle, written by the seam_forces stage; nullptr when the cloth has no seams.
+    const float* __restrict seam_fx;
+    const float* __restrict seam_fy;
+    const float* __restrict seam_fz;
+
     // Staged-pipeline scratch: spring force (N) and external acceleration (m/s^2).
     float* __restrict fx;
     float* __restrict fy;
@@ -76,6 +81,15 @@ struct StepContext {
     float* __restrict az;
     std::uint8_t* block_ok; ///< per block: 1 when every value written is finite
 };
+
+/// Adds the seam forces of batch p (when the cloth has seams) to the spring forces.
+template <bool Seams> DRAPE_INLINE void add_seam_forces(const StepContext& c, std::size_t p, Vec3b& f) noexcept {
+    if constexpr (Seams) {
+        f.x = f.x + simd::load(c.seam_fx + p);
+        f.y = f.y + simd::load(c.seam_fy + p);
+        f.z = f.z + simd::load(c.seam_fz + p);
+    }
+}
 
 DRAPE_INLINE SelfBatch load_self(const StepContext& c, std::size_t p) noexcept {
     return {simd::load(c.x + p), simd::load(c.y + p), simd::load(c.z + p),

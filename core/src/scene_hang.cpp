@@ -32,7 +32,7 @@ SceneBuild build_hang_scene(const HangParams& p) {
     const float h = p.size / static_cast<float>(n - 1);
     const float mass = p.total_mass / static_cast<float>(count);
 
-    // Particles: row j along z, column i along x, flat at y = 0, centred on the origin.
+    // Particles: column i along x; row j along +z (horizontal) or down -y (vertical); centred on params.centre.
     SceneBuild out;
     InitialState& s = out.initial;
     s.x.resize(count);
@@ -42,15 +42,27 @@ SceneBuild build_hang_scene(const HangParams& p) {
     s.vy.assign(count, 0.0f);
     s.vz.assign(count, 0.0f);
     std::vector<float> inv_mass(count, 1.0f / mass);
+    for (float c : p.centre)
+        if (!(std::fabs(c) <= 1000.0f))
+            throw InvalidInput("cloth centre coordinate " + std::to_string(c) + " m is outside [-1000, 1000]");
     for (std::uint32_t j = 0; j < n; ++j)
         for (std::uint32_t i = 0; i < n; ++i) {
             const std::uint32_t k = grid_index(n, i, j);
-            s.x[k] = -0.5f * p.size + static_cast<float>(i) * h;
-            s.z[k] = -0.5f * p.size + static_cast<float>(j) * h;
+            const float u = -0.5f * p.size + static_cast<float>(i) * h, v = -0.5f * p.size + static_cast<float>(j) * h;
+            s.x[k] = p.centre[0] + u;
+            if (p.plane == GridPlane::horizontal) {
+                s.y[k] = p.centre[1];
+                s.z[k] = p.centre[2] + v;
+            } else {
+                s.y[k] = p.centre[1] - v;
+                s.z[k] = p.centre[2];
+            }
         }
-    if (p.pin_corners) {
+    if (p.pins == GridPins::corners) {
         inv_mass[grid_index(n, 0, 0)] = 0.0f;
         inv_mass[grid_index(n, n - 1, 0)] = 0.0f;
+    } else if (p.pins == GridPins::top_edge) {
+        for (std::uint32_t i = 0; i < n; ++i) inv_mass[grid_index(n, i, 0)] = 0.0f;
     }
 
     // The stencil: 12 slots in ascending index offset (the order of a sorted CSR row).
@@ -101,7 +113,7 @@ SceneBuild build_hang_scene(const HangParams& p) {
     const std::size_t halo = 2 * std::size_t{n} + 2 + simd::width;
     out.cloth = cook_cloth(inv_mass, std::move(edges), material, halo);
     out.cloth.grid = std::move(g);
-    // Triangles: two per grid cell, counter-clockwise seen from +y.
+    // Triangles: two per grid cell, counter-clockwise seen from +y (horizontal) or +z (vertical).
     auto& tri = out.cloth.triangles;
     tri.reserve(static_cast<std::size_t>(6) * (n - 1) * (n - 1));
     for (std::uint32_t j = 0; j + 1 < n; ++j)

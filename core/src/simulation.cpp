@@ -24,6 +24,7 @@ const char* kernel_path_name(KernelPath path) noexcept {
 
 const char* stage_name(Stage stage) noexcept {
     switch (stage) {
+    case Stage::seam_forces: return "seam_forces";
     case Stage::external_forces: return "external_forces";
     case Stage::spring_forces: return "spring_forces";
     case Stage::integrate: return "integrate";
@@ -90,6 +91,8 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
         for (AlignedArray<float>* a : {&b.x, &b.y, &b.z, &b.u, &b.v, &b.w}) a->reset(padded, halo);
     for (AlignedArray<float>* a : {&fx_, &fy_, &fz_, &ax_, &ay_, &az_}) a->reset(padded);
     block_ok_.assign(cloth_.block_count(), 1);
+    if (!cloth_.seams.empty())
+        for (AlignedArray<float>* a : {&seam_fx_, &seam_fy_, &seam_fz_}) a->reset(padded);
     inv_mass_authored_.assign(cloth_.inv_mass.begin(), cloth_.inv_mass.end());
     if (params_.strain_limit.ratio > 0.0f) cook_strain_limit();
 
@@ -227,6 +230,7 @@ std::array<float, 3> Simulation::velocity(std::size_t i) const noexcept {
 std::vector<std::string> Simulation::stage_names() const {
     std::vector<std::string> out{"external_forces", "spring_forces", "spring_damping", "integrate", "pins"};
     if (params_.wind.enabled) out.insert(out.begin() + 1, "wind");
+    if (!cloth_.seams.empty()) out.insert(out.begin() + 2, "seam_forces");
     if (params_.strain_limit.ratio > 0.0f) out.push_back("strain_limit");
     if (!params_.colliders.empty()) out.push_back("collide");
     return out;

@@ -4,10 +4,11 @@
 namespace drape::kernels {
 
 namespace {
-template <Integrator I, class Springs>
+template <Integrator I, class Springs, bool Seams>
 void spring_forces_impl(const StepContext& c, std::size_t begin, std::size_t end) {
     for (std::size_t p = begin; p < end; p += simd::width) {
-        const Vec3b f = Springs::template accumulate<I>(c, p, load_self(c, p));
+        Vec3b f = Springs::template accumulate<I>(c, p, load_self(c, p));
+        add_seam_forces<Seams>(c, p, f);
         simd::store(c.fx + p, f.x);
         simd::store(c.fy + p, f.y);
         simd::store(c.fz + p, f.z);
@@ -15,15 +16,22 @@ void spring_forces_impl(const StepContext& c, std::size_t begin, std::size_t end
 }
 } // namespace
 
-void spring_forces_range(const StepContext& c, Integrator integrator, KernelPath path, std::size_t begin,
-                         std::size_t end) {
+template <bool Seams>
+void spring_forces_dispatch(const StepContext& c, Integrator integrator, KernelPath path, std::size_t begin,
+                            std::size_t end) {
     const bool grid = path == KernelPath::grid;
     if (integrator == Integrator::symplectic_euler)
-        grid ? spring_forces_impl<Integrator::symplectic_euler, GridSprings>(c, begin, end)
-             : spring_forces_impl<Integrator::symplectic_euler, CsrSprings>(c, begin, end);
+        grid ? spring_forces_impl<Integrator::symplectic_euler, GridSprings, Seams>(c, begin, end)
+             : spring_forces_impl<Integrator::symplectic_euler, CsrSprings, Seams>(c, begin, end);
     else
-        grid ? spring_forces_impl<Integrator::verlet, GridSprings>(c, begin, end)
-             : spring_forces_impl<Integrator::verlet, CsrSprings>(c, begin, end);
+        grid ? spring_forces_impl<Integrator::verlet, GridSprings, Seams>(c, begin, end)
+             : spring_forces_impl<Integrator::verlet, CsrSprings, Seams>(c, begin, end);
+}
+
+void spring_forces_range(const StepContext& c, Integrator integrator, KernelPath path, bool seams, std::size_t begin,
+                         std::size_t end) {
+    seams ? spring_forces_dispatch<true>(c, integrator, path, begin, end)
+          : spring_forces_dispatch<false>(c, integrator, path, begin, end);
 }
 
 } // namespace drape::kernels

@@ -92,7 +92,8 @@ struct CsrSprings {
 };
 
 /// Stage pass: spring forces of particles [begin, end) into the scratch arrays fx, fy, fz.
-void spring_forces_range(const StepContext& c, Integrator integrator, KernelPath path, std::size_t begin,
+/// With `seams`, adds the seam forces written by the seam_forces stage (as the fused pass does).
+void spring_forces_range(const StepContext& c, Integrator integrator, KernelPath path, bool seams, std::size_t begin,
                          std::size_t end);
 
 } // namespace drape::kernels

@@ -25,6 +25,7 @@ SpringGraph build_spring_graph(std::size_t particle_count, std::size_t padded_co
     // CSR: count, prefix-sum, fill, then sort each row by neighbour.
     g.offsets.assign(n + 1, 0);
     for (const Edge& e : edges) {
+        if (e.kind == SpringKind::seam) continue; // seams are coloured groups, not CSR rows (cloth.hpp)
         ++g.offsets[e.a + 1];
         ++g.offsets[e.b + 1];
     }
@@ -34,6 +35,7 @@ SpringGraph build_spring_graph(std::size_t particle_count, std::size_t padded_co
     std::vector<std::uint32_t> fill(g.offsets.begin(), g.offsets.end() - 1);
     for (std::uint32_t k = 0; k < edges.size(); ++k) {
         const Edge& e = edges[k];
+        if (e.kind == SpringKind::seam) continue;
         g.neighbour[fill[e.a]] = e.b;
         g.edge_index[fill[e.a]++] = k;
         g.neighbour[fill[e.b]] = e.a;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "drape/aligned_array.hpp"
+#include "drape/colouring.hpp"
 #include "drape/simd.hpp"
 #include "drape/spring_graph.hpp"
 
@@ -42,6 +43,18 @@ struct GridStencil {
     AlignedArray<std::uint32_t> mask;               ///< per particle: bit s set when slot s's spring exists
 };
 
+/// Seam springs (SpringKind::seam, e.g. sewing two panels): the irregular part of a garment. They are not in the CSR;
+/// the seam_forces stage evaluates each once and writes both ends, colour group by colour group (no two springs of
+/// a group share a particle), groups in a fixed order: parallel, without atomics, thread-count independent.
+struct SeamSet {
+    ColourGroups groups;                 ///< edge_index: indices into Cloth::edges
+    std::vector<std::uint32_t> a, b;     ///< spring ends, in group order
+    std::vector<float> rest;             ///< m, in group order
+    std::vector<SpringKind> kind;        ///< material of each (seam), in group order
+    std::vector<std::uint32_t> particles; ///< every particle touched by a seam, ascending
+    bool empty() const noexcept { return a.empty(); }
+};
+
 /// Everything about a cloth that does not change while it is simulated.
 struct Cloth {
     std::size_t particle_count = 0; ///< real particles
@@ -50,7 +63,8 @@ struct Cloth {
     AlignedArray<float> inv_mass;   ///< 1/kg; 0 = pinned (and for padding)
     std::array<SpringMaterial, spring_kind_count> material{};
     std::vector<Edge> edges;         ///< every spring once (cold list; health and colouring read it)
-    SpringGraph graph;               ///< CSR and SIMD-sliced CSR over the edges
+    SpringGraph graph;               ///< CSR and SIMD-sliced CSR over the edges, seams excepted
+    SeamSet seams;                   ///< seam springs, coloured
     std::optional<GridStencil> grid; ///< present when the cloth is a full or masked regular grid
     std::vector<std::uint32_t> triangles; ///< 3 indices per triangle, counter-clockwise seen from +normal
 

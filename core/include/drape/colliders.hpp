@@ -84,12 +84,12 @@ void check_collider(const Collider& collider);
 /// at the torso centre. Ellipsoids (centre; semi-axes), m:
 ///   torso     (0, 0, 0);        (0.16, 0.30, 0.10)
 ///   hips      (0, -0.30, 0);    (0.17, 0.15, 0.11)
-///   shoulders (0, 0.22, 0);     (0.21, 0.07, 0.09)
+///   shoulders (0, 0.22, 0);     (0.19, 0.06, 0.08) - its girth (~0.92 m) fits inside the shirt tube (2 x 0.48 m)
 ///   neck      (0, 0.34, 0);     (0.05, 0.07, 0.05)
 ///   head      (0, 0.48, 0);     (0.08, 0.11, 0.09)
 ///   arms      (+-0.40, 0.22, 0); (0.22, 0.045, 0.045) - horizontal, a T-pose matching the T-shirt's flat
 ///   sleeves.
-/// The shirt's shoulder line (y = 0.33) sits on the shoulders (top 0.29 + thickness), its sleeves (y
+/// The shirt's shoulder line (y = 0.33) sits on the shoulders (top 0.28 + thickness), its sleeves (y
 /// 0.15..0.33) around the arms (y 0.175..0.265), its panels 0.13 m in front of and behind the centre, clear
 /// of every part.
 std::vector<Collider> default_body(ColliderSurface surface = {0.005f, 0.5f});

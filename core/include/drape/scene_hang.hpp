@@ -1,15 +1,27 @@
-// Scene "hang" (BENCH.md): a square cloth of N x N particles, flat and horizontal in the x-z plane at y = 0,
-// structural, shear and bend springs, corners (0,0) and (N-1,0) pinned. Scene builders live once in core and
-// serve the app, the tests and the benchmarks.
+// Square grid cloths. Scene "hang" (BENCH.md) is the default: N x N particles, flat and horizontal in the x-z plane
+// at y = 0, structural, shear and bend springs, corners (0,0) and (N-1,0) pinned. The same builder makes the other
+// grid scenes (drape, sphere, flag: another plane, centre or pin set). Scene builders live once in core and serve
+// the app, the tests and the benchmarks.
 #pragma once
 
+#include <array>
 #include <cstdint>
 
 #include "drape/cloth.hpp"
 
 namespace drape {
 
-/// What the user chooses for "hang" (cold tier). Ranges are checked by build_hang_scene.
+enum class GridPlane : std::uint8_t {
+    horizontal, ///< x-z plane at centre.y; row j along +z
+    vertical,   ///< x-y plane at centre.z; row 0 on top, row j going down (-y)
+};
+enum class GridPins : std::uint8_t {
+    corners,  ///< (0,0) and (N-1,0): the two corners of row 0
+    top_edge, ///< all of row 0
+    none,
+};
+
+/// What the user chooses for a grid cloth (cold tier). Ranges are checked by build_hang_scene.
 struct HangParams {
     std::uint32_t n = 100;     ///< particles per side, 2..4096
     float size = 1.0f;         ///< side length, m
@@ -20,7 +32,9 @@ struct HangParams {
     /// Spring damping as a fraction of critical damping of one spring between two particles (0..1):
     /// kd = ratio * 2 sqrt(k m / 2). Keeps the damping meaningful at any resolution.
     float damping_ratio = 0.05f;
-    bool pin_corners = true;
+    GridPins pins = GridPins::corners;
+    GridPlane plane = GridPlane::horizontal;
+    std::array<float, 3> centre{0.0f, 0.0f, 0.0f}; ///< m, centre of the cloth
 };
 
 inline constexpr std::uint32_t hang_min_n = 2;

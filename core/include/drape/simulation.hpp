@@ -81,7 +81,7 @@ struct Health {
 };
 
 /// Per-stage names in step order; the same strings label bench counters and profiler zones.
-enum class Stage : std::uint8_t { external_forces, spring_forces, integrate, strain_limit, collide, count };
+enum class Stage : std::uint8_t { seam_forces, external_forces, spring_forces, integrate, strain_limit, collide, count };
 const char* stage_name(Stage stage) noexcept;
 
 class Simulation {
@@ -180,6 +180,8 @@ class Simulation {
     void cook_strain_limit();
     template <bool Parallel> void strain_limit_stage(StateBuffer& out);
     template <bool Parallel> void collide_stage(StateBuffer& out);
+    template <bool Parallel> void seam_forces_stage();
+    AlignedArray<float> seam_fx_, seam_fy_, seam_fz_; ///< seam force per particle, N (allocated when there are seams)
     std::size_t grabbed_ = SIZE_MAX;
     bool grabbed_was_pinned_ = false;
     std::array<float, 3> grab_target_{};

@@ -50,7 +50,8 @@ struct SpringGraph {
     std::size_t sell_entry_count() const noexcept { return sell_neighbour.size(); }
 };
 
-/// Builds CSR and SELL from edges over `particle_count` particles (padded to `padded_count`).
+/// Builds CSR and SELL from edges over `particle_count` particles (padded to `padded_count`). Seam springs are left
+/// out (Cloth::seams handles them).
 SpringGraph build_spring_graph(std::size_t particle_count, std::size_t padded_count, std::span<const Edge> edges);
 
 } // namespace drape

@@ -1,0 +1,171 @@
+// Scene files: every built-in loads and runs; broken files get their clear error (file, JSON path, range).
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include "drape/scene.hpp"
+
+using namespace drape;
+
+namespace {
+
+std::string error_of(const std::string& json) {
+    try {
+        parse_scene(json, "test.json");
+    } catch (const InvalidInput& e) {
+        return e.what();
+    }
+    return "";
+}
+
+bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+TEST(Scenes, EveryBuiltinLoadsBuildsAndSteps) {
+    const std::vector<std::string> names = builtin_scene_names();
+    EXPECT_EQ(names, (std::vector<std::string>{"hang", "drape", "sphere", "flag", "tshirt"}));
+    for (const std::string& name : names) {
+        const SceneSpec spec = load_scene(name);
+        EXPECT_EQ(spec.name, name);
+        BuiltScene b = build_scene(spec);
+        EXPECT_GT(b.cloth.particle_count, 0u) << name;
+        EXPECT_GT(b.params.dt, 0.0f) << name;
+        Simulation sim(std::move(b.cloth), b.initial, b.params);
+        sim.step(200);
+        EXPECT_TRUE(sim.health().finite) << name;
+    }
+}
+
+TEST(Scenes, BuiltinFilesOnDiskAreTheEmbeddedOnes) {
+    for (const std::string& name : builtin_scene_names()) {
+        const std::string path = std::string(DRAPE_SOURCE_DIR) + "/scenes/" + name + ".json";
+        BuiltScene from_file = build_scene(load_scene(path));
+        BuiltScene builtin = build_scene(load_scene(name));
+        EXPECT_EQ(from_file.cloth.particle_count, builtin.cloth.particle_count) << name;
+        EXPECT_EQ(from_file.cloth.spring_count(), builtin.cloth.spring_count()) << name;
+        EXPECT_EQ(from_file.params.dt, builtin.params.dt) << name;
+        EXPECT_EQ(from_file.params.colliders.size(), builtin.params.colliders.size()) << name;
+    }
+}
+
+TEST(Scenes, SeedFigures) {
+    const BuiltScene drape = build_scene(load_scene("drape"));
+    EXPECT_EQ(drape.cloth.particle_count, 1156u); // seed 001: 34 x 34
+    EXPECT_EQ(drape.cloth.triangles.size() / 3, 2178u);
+    const BuiltScene shirt = build_scene(load_scene("tshirt"));
+    EXPECT_NEAR(double(shirt.cloth.particle_count), 1008.0, 30.0); // seed 000
+    EXPECT_GT(shirt.cloth.seams.a.size(), 0u);
+    EXPECT_GT(shirt.params.colliders.size(), 5u) << "the body of ellipsoids";
+}
+
+TEST(Scenes, SeamColourGroupsShareNoParticleAndHoldEverySeamOnce) {
+    const BuiltScene shirt = build_scene(load_scene("tshirt"));
+    const SeamSet& s = shirt.cloth.seams;
+    std::multiset<std::uint32_t> seen(s.groups.edge_index.begin(), s.groups.edge_index.end());
+    for (std::uint32_t e = 0; e < shirt.cloth.edges.size(); ++e)
+        EXPECT_EQ(seen.count(e), shirt.cloth.edges[e].kind == SpringKind::seam ? 1u : 0u) << e;
+    for (std::size_t g = 0; g < s.groups.group_count(); ++g) {
+        if (s.groups.is_overflow(g)) continue;
+        std::set<std::uint32_t> touched;
+        for (std::uint32_t e : s.groups.group(g)) {
+            EXPECT_TRUE(touched.insert(shirt.cloth.edges[e].a).second);
+            EXPECT_TRUE(touched.insert(shirt.cloth.edges[e].b).second);
+        }
+    }
+    // Seams are not CSR rows: the CSR holds exactly the other springs, both directions.
+    EXPECT_EQ(shirt.cloth.graph.entry_count(), 2 * (shirt.cloth.spring_count() - s.a.size()));
+}
+
+TEST(Scenes, TShirtClosesItsSeams) {
+    BuiltScene b = build_scene(load_scene("tshirt"));
+    const float h = 1.0f / 35.0f;
+    Simulation sim(std::move(b.cloth), b.initial, b.params);
+    sim.step(static_cast<std::size_t>(1.5 / sim.params().dt));
+    ASSERT_TRUE(sim.health().finite);
+    // Every seam spring is within the strain limit: the two panels are sewn together (the shirt is closed).
+    const SeamSet& s = sim.cloth().seams;
+    const float limit = 1.0f + sim.params().strain_limit.ratio;
+    float worst = 0.0f;
+    for (std::size_t k = 0; k < s.a.size(); ++k) {
+        const float dx = sim.x()[s.b[k]] - sim.x()[s.a[k]], dy = sim.y()[s.b[k]] - sim.y()[s.a[k]],
+                    dz = sim.z()[s.b[k]] - sim.z()[s.a[k]];
+        worst = std::max(worst, std::sqrt(dx * dx + dy * dy + dz * dz) / s.rest[k]);
+    }
+    EXPECT_LE(worst, limit + 1e-3f) << "longest seam " << worst * s.rest[0] << " m, rest " << s.rest[0] << " m, h " << h;
+    // And no particle is inside the body.
+    for (std::size_t i = 0; i < sim.cloth().particle_count; ++i)
+        for (const Collider& c : sim.params().colliders)
+            ASSERT_FALSE(is_inside(c, {sim.x()[i], sim.y()[i], sim.z()[i]}, 1e-5f)) << i;
+}
+
+struct BadFile {
+    const char* name;
+    const char* json;
+    const char* expect; ///< must appear in the message
+};
+
+class BrokenScene : public ::testing::TestWithParam<BadFile> {};
+
+TEST_P(BrokenScene, GivesAClearError) {
+    const BadFile& c = GetParam();
+    const std::string msg = error_of(c.json);
+    ASSERT_FALSE(msg.empty()) << c.name << " was accepted";
+    EXPECT_TRUE(has(msg, "test.json")) << msg;
+    EXPECT_TRUE(has(msg, c.expect)) << c.name << ": " << msg;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Files, BrokenScene,
+    ::testing::Values(
+        BadFile{"malformed", "{\"scene\": \"x\", ", "malformed JSON"},
+        BadFile{"not_object", "[1, 2]", "must be a JSON object"},
+        BadFile{"wrong_type", R"({"cloth": {"n": "ten"}})", "cloth.n must be a whole number in [2, 4096]"},
+        BadFile{"fraction", R"({"cloth": {"n": 10.5}})", "cloth.n"},
+        BadFile{"unknown_field", R"({"cloth": {"n": 10, "colour": 3}})", "cloth.colour is not a known field"},
+        BadFile{"unknown_top", R"({"gravity": 3})", "gravity is not a known field"},
+        BadFile{"stiffness_range", R"({"material": {"stiffness": 50}})", "[100, 25000] N/m"},
+        BadFile{"node_mass", R"({"cloth": {"n": 10, "mass": 1.0}})", "[0.001, 1] g"},
+        BadFile{"absurd_size", R"({"cloth": {"n": 100000}})", "cloth.n"},
+        BadFile{"absurd_tshirt", R"({"cloth": {"type": "tshirt", "cells_per_metre": 1e9}})", "cells_per_metre"},
+        BadFile{"bad_enum", R"({"cloth": {"pins": "left"}})", "cloth.pins"},
+        BadFile{"bad_vec", R"({"physics": {"gravity": [0, -9.81]}})", "physics.gravity must be an array of 3"},
+        BadFile{"nan_like", R"({"physics": {"drag": -1}})", "physics.drag"},
+        BadFile{"dt_range", R"({"physics": {"dt": 5}})", "physics.dt"},
+        BadFile{"collider_type", R"({"colliders": [{"type": "cube"}]})", "colliders[0].type"},
+        BadFile{"collider_missing_type", R"({"colliders": [{"radius": 1}]})", "colliders[0].type is required"},
+        BadFile{"collider_radius", R"({"colliders": [{"type": "sphere", "radius": -1}]})", "colliders[0].radius"},
+        BadFile{"collider_unknown", R"({"colliders": [{"type": "sphere", "colour": 1}]})",
+                "colliders[0].colour is not a known field"},
+        BadFile{"collider_friction", R"({"colliders": [{"type": "ground", "friction": 2}]})", "[0, 1]"},
+        BadFile{"strain_passes", R"({"physics": {"strain_limit": {"passes": 0}}})", "physics.strain_limit.passes"},
+        BadFile{"wind_type", R"({"physics": {"wind": {"enabled": "yes"}}})", "physics.wind.enabled must be true or false"},
+        BadFile{"too_many_colliders", R"({"colliders": [{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}]})", "at most 64"}),
+    [](const auto& info) { return std::string(info.param.name); });
+
+TEST(Scenes, MissingFileAndUnknownNameAreClear) {
+    try {
+        load_scene("/nonexistent/dir/scene.json");
+        FAIL();
+    } catch (const InvalidInput& e) {
+        EXPECT_TRUE(has(e.what(), "/nonexistent/dir/scene.json")) << e.what();
+        EXPECT_TRUE(has(e.what(), "cannot open")) << e.what();
+    }
+    try {
+        load_scene("hangg");
+        FAIL();
+    } catch (const InvalidInput& e) {
+        EXPECT_TRUE(has(e.what(), "unknown scene 'hangg'")) << e.what();
+        EXPECT_TRUE(has(e.what(), "hang, drape, sphere, flag, tshirt")) << e.what();
+    }
+}
+
+TEST(Scenes, MinimalFileGetsTheHangDefaults) {
+    const SceneSpec s = parse_scene("{}", "test.json");
+    EXPECT_EQ(s.grid.n, 100u);
+    EXPECT_EQ(s.physics.strain_limit.ratio, 0.0f);
+    EXPECT_TRUE(s.physics.colliders.empty());
+}
+
+} // namespace
