@@ -68,6 +68,9 @@ int main(int argc, char** argv) {
     cmd->add_option("--drag", run.drag, "Air drag kr in 1/s (F = -m kr v) [scene's]")
         ->check(in_range<float>(0.0f, 100.0f, " 1/s"));
     cmd->add_flag("--wind", run.wind, "Enable seed 000's analytic wind field");
+    cmd->add_flag("--aero", run.aero,
+                  "Enable seed 004's aerodynamic wind per triangle (density, drag coefficient and wind velocity from "
+                  "the scene; defaults 1.2 kg/m^3, 1.0, (0, 0, 5) m/s)");
     cmd->add_option("--wind-strength", run.wind_strength, "Wind amplitude in m/s^2 [scene's, 2]")
         ->check(in_range<float>(0.0f, 100.0f, " m/s^2"));
     cmd->add_option("--kernel", run.kernel, "Spring kernel: grid stencil, general CSR, or auto")

@@ -89,6 +89,7 @@ int run_command(const RunOptions& o) {
     if (o.drag) spec.physics.air_drag = *o.drag;
     if (o.integrator) spec.physics.integrator = *o.integrator == "verlet" ? Integrator::verlet : Integrator::symplectic_euler;
     if (o.wind) spec.physics.wind.enabled = true;
+    if (o.aero) spec.physics.aero.enabled = true;
     if (o.wind_strength) spec.physics.wind.strength = *o.wind_strength;
     if (o.strain_limit) spec.physics.strain_limit.ratio = *o.strain_limit;
     if (o.strain_passes) spec.physics.strain_limit.passes = *o.strain_passes;
@@ -163,6 +164,7 @@ int run_command(const RunOptions& o) {
     j["fused"] = sp.fused;
     j["stiffness"] = spec.stiffness;
     j["wind"] = sp.wind.enabled;
+    j["aero"] = sp.aero.enabled;
     j["strain_limit"] = sp.strain_limit.ratio;
     j["strain_passes"] = sp.strain_limit.passes;
     j["strain_every"] = sp.strain_limit.every;

@@ -20,6 +20,7 @@ struct RunOptions {
     std::optional<float> damping;
     std::optional<float> drag;
     bool wind = false;
+    bool aero = false;
     std::optional<float> wind_strength;
     std::string kernel = "auto";
     bool staged = false;

@@ -67,10 +67,10 @@ struct StepContext {
     float wind_strength; ///< m/s^2
     float wind_phase;    ///< 10 t, rad
 
-    // Seam forces (N) per particle, written by the seam_forces stage; nullptr when the cloth has no seams.
-    const float* __restrict seam_fx;
-    const float* __restrict seam_fy;
-    const float* __restrict seam_fz;
+    // Forces (N) per particle from the irregular stages (aero_forces, seam_forces); unused when neither runs.
+    const float* __restrict extra_fx;
+    const float* __restrict extra_fy;
+    const float* __restrict extra_fz;
 
     // Staged-pipeline scratch: spring force (N) and external acceleration (m/s^2).
     float* __restrict fx;
@@ -82,12 +82,12 @@ struct StepContext {
     std::uint8_t* block_ok; ///< per block: 1 when every value written is finite
 };
 
-/// Adds the seam forces of batch p (when the cloth has seams) to the spring forces.
-template <bool Seams> DRAPE_INLINE void add_seam_forces(const StepContext& c, std::size_t p, Vec3b& f) noexcept {
-    if constexpr (Seams) {
-        f.x = f.x + simd::load(c.seam_fx + p);
-        f.y = f.y + simd::load(c.seam_fy + p);
-        f.z = f.z + simd::load(c.seam_fz + p);
+/// Adds the forces of the irregular stages (aerodynamic wind, seams) of batch p to the spring forces.
+template <bool Extra> DRAPE_INLINE void add_extra_forces(const StepContext& c, std::size_t p, Vec3b& f) noexcept {
+    if constexpr (Extra) {
+        f.x = f.x + simd::load(c.extra_fx + p);
+        f.y = f.y + simd::load(c.extra_fy + p);
+        f.z = f.z + simd::load(c.extra_fz + p);
     }
 }
 

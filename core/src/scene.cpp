@@ -239,6 +239,12 @@ SceneSpec parse_scene(const std::string& text, const std::string& source) {
     p.wind.enabled = wind.boolean("enabled", false);
     p.wind.strength = static_cast<float>(wind.number("strength", 0.0, 100.0, " m/s^2", p.wind.strength));
     wind.finish();
+    ObjectReader aero = ph.object("aero");
+    p.aero.enabled = aero.boolean("enabled", false);
+    p.aero.density = static_cast<float>(aero.number("density", 0.0, 100.0, " kg/m^3", p.aero.density));
+    p.aero.drag_coefficient = static_cast<float>(aero.number("drag_coefficient", 0.0, 10.0, "", p.aero.drag_coefficient));
+    p.aero.velocity = aero.vec3("velocity", 100.0, " m/s", p.aero.velocity);
+    aero.finish();
     ObjectReader sl = ph.object("strain_limit");
     p.strain_limit.ratio = static_cast<float>(sl.number("ratio", 0.0, 10.0, "", 0.0));
     p.strain_limit.passes = sl.integer("passes", 1, 100, 4);

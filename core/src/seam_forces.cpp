@@ -19,10 +19,11 @@ constexpr std::size_t seam_chunk = 2048; ///< springs per parallel chunk of a gr
 template <bool Parallel> void Simulation::seam_forces_stage() {
     const SeamSet& s = cloth_.seams;
     const StateBuffer& st = cur();
-    float* __restrict fx = seam_fx_.data();
-    float* __restrict fy = seam_fy_.data();
-    float* __restrict fz = seam_fz_.data();
-    for (std::uint32_t i : s.particles) fx[i] = fy[i] = fz[i] = 0.0f;
+    float* __restrict fx = extra_fx_.data();
+    float* __restrict fy = extra_fy_.data();
+    float* __restrict fz = extra_fz_.data();
+    if (!params_.aero.enabled) // else aero_forces has just written every particle's entry: add on top
+        for (std::uint32_t i : s.particles) fx[i] = fy[i] = fz[i] = 0.0f;
     const bool verlet = params_.integrator == Integrator::verlet;
     const float inv_dt = 1.0f / params_.dt;
     auto range = [&](std::size_t begin, std::size_t end) {

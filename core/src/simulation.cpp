@@ -24,6 +24,7 @@ const char* kernel_path_name(KernelPath path) noexcept {
 
 const char* stage_name(Stage stage) noexcept {
     switch (stage) {
+    case Stage::aero_forces: return "aero_forces";
     case Stage::seam_forces: return "seam_forces";
     case Stage::external_forces: return "external_forces";
     case Stage::spring_forces: return "spring_forces";
@@ -56,6 +57,13 @@ void validate_params(const SimulationParams& p) {
           "strain limit ratio", p.strain_limit.ratio, "[0, 10] (0 = off)");
     check(p.strain_limit.passes >= 1 && p.strain_limit.passes <= 100, "strain limit passes", p.strain_limit.passes,
           "[1, 100]");
+    check(std::isfinite(p.aero.density) && p.aero.density >= 0.0f && p.aero.density <= 100.0f, "aero density",
+          p.aero.density, "[0, 100] kg/m^3");
+    check(std::isfinite(p.aero.drag_coefficient) && p.aero.drag_coefficient >= 0.0f && p.aero.drag_coefficient <= 10.0f,
+          "aero drag coefficient", p.aero.drag_coefficient, "[0, 10]");
+    for (int k = 0; k < 3; ++k)
+        check(std::isfinite(p.aero.velocity[k]) && std::fabs(p.aero.velocity[k]) <= 100.0f,
+              "aero velocity[" + std::to_string(k) + "]", p.aero.velocity[k], "[-100, 100] m/s");
     check(p.strain_limit.every >= 1 && p.strain_limit.every <= 1000, "strain limit interval", p.strain_limit.every,
           "[1, 1000] substeps");
     if (p.colliders.size() > 64)
@@ -91,10 +99,10 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
         for (AlignedArray<float>* a : {&b.x, &b.y, &b.z, &b.u, &b.v, &b.w}) a->reset(padded, halo);
     for (AlignedArray<float>* a : {&fx_, &fy_, &fz_, &ax_, &ay_, &az_}) a->reset(padded);
     block_ok_.assign(cloth_.block_count(), 1);
-    if (!cloth_.seams.empty())
-        for (AlignedArray<float>* a : {&seam_fx_, &seam_fy_, &seam_fz_}) a->reset(padded);
+    for (AlignedArray<float>* a : {&extra_fx_, &extra_fy_, &extra_fz_}) a->reset(padded);
     inv_mass_authored_.assign(cloth_.inv_mass.begin(), cloth_.inv_mass.end());
     if (params_.strain_limit.ratio > 0.0f) cook_strain_limit();
+    if (params_.aero.enabled) cook_aero();
 
     StateBuffer& s = buffers_[0];
     std::memcpy(s.x.data(), initial.x.data(), n * sizeof(float));
@@ -147,6 +155,7 @@ void Simulation::set_params(const SimulationParams& params) {
     params_ = params;
     kernel_ = kernel;
     if (params_.strain_limit.ratio > 0.0f) cook_strain_limit();
+    if (params_.aero.enabled) cook_aero();
 }
 
 void Simulation::set_material(SpringKind kind, SpringMaterial material) {
@@ -231,6 +240,7 @@ std::vector<std::string> Simulation::stage_names() const {
     std::vector<std::string> out{"external_forces", "spring_forces", "spring_damping", "integrate", "pins"};
     if (params_.wind.enabled) out.insert(out.begin() + 1, "wind");
     if (!cloth_.seams.empty()) out.insert(out.begin() + 2, "seam_forces");
+    if (params_.aero.enabled) out.insert(out.begin() + 1, "aero_forces");
     if (params_.strain_limit.ratio > 0.0f) out.push_back("strain_limit");
     if (!params_.colliders.empty()) out.push_back("collide");
     return out;

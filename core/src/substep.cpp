@@ -1,5 +1,6 @@
 // One substep: the pipeline that runs the stages over fixed particle blocks.
-//   stage 0 seam_forces (seam_forces.cpp, colour groups) when the cloth has seams;
+//   stage 0a aero_forces (aero_forces.cpp, per triangle, gathered per particle) when aerodynamic wind is on;
+//   stage 0b seam_forces (seam_forces.cpp, colour groups) when the cloth has seams;
 //   stages 1-3 (external forces, spring forces, integrate + pins): fused or staged, below;
 //   stage 5 strain_limit (strain_limit.cpp) and stage 6 collide (collide.cpp) on the freshly written buffer.
 //
@@ -28,13 +29,13 @@ namespace drape {
 namespace kernels {
 namespace {
 
-template <Integrator I, class Springs, bool Wind, bool Seams>
+template <Integrator I, class Springs, bool Wind, bool Extra>
 void fused_block(const StepContext& c, std::size_t begin, std::size_t end, std::size_t block) {
     fmask ok(true);
     for (std::size_t p = begin; p < end; p += simd::width) {
         const SelfBatch s = load_self(c, p);
         Vec3b f = Springs::template accumulate<I>(c, p, s);
-        add_seam_forces<Seams>(c, p, f);
+        add_extra_forces<Extra>(c, p, f);
         const Vec3b a = external_acceleration<I, Wind>(c, s, movable_lanes(c, p));
         ok = ok & integrate_batch<I>(c, p, s, f, a);
     }
@@ -43,10 +44,10 @@ void fused_block(const StepContext& c, std::size_t begin, std::size_t end, std::
 
 using FusedFn = void (*)(const StepContext&, std::size_t, std::size_t, std::size_t);
 
-template <Integrator I, bool Seams> FusedFn pick_fused(KernelPath path, bool wind) {
+template <Integrator I, bool Extra> FusedFn pick_fused(KernelPath path, bool wind) {
     if (path == KernelPath::grid)
-        return wind ? fused_block<I, GridSprings, true, Seams> : fused_block<I, GridSprings, false, Seams>;
-    return wind ? fused_block<I, CsrSprings, true, Seams> : fused_block<I, CsrSprings, false, Seams>;
+        return wind ? fused_block<I, GridSprings, true, Extra> : fused_block<I, GridSprings, false, Extra>;
+    return wind ? fused_block<I, CsrSprings, true, Extra> : fused_block<I, CsrSprings, false, Extra>;
 }
 
 template <Integrator I> FusedFn pick_fused(KernelPath path, bool wind, bool seams) {
@@ -128,9 +129,9 @@ kernels::StepContext Simulation::make_context(std::size_t step_index) {
     c.sell_stiffness = cl.graph.sell_stiffness.data();
     c.sell_damping = cl.graph.sell_damping.data();
 
-    c.seam_fx = seam_fx_.data();
-    c.seam_fy = seam_fy_.data();
-    c.seam_fz = seam_fz_.data();
+    c.extra_fx = extra_fx_.data();
+    c.extra_fy = extra_fy_.data();
+    c.extra_fz = extra_fz_.data();
     c.fx = fx_.data();
     c.fy = fy_.data();
     c.fz = fz_.data();
@@ -144,21 +145,22 @@ kernels::StepContext Simulation::make_context(std::size_t step_index) {
 template <bool Parallel> void Simulation::step_impl(std::size_t count) {
     const Integrator integ = params_.integrator;
     const bool wind = params_.wind.enabled;
-    const bool seams = !cloth_.seams.empty();
+    const bool seams = !cloth_.seams.empty(), aero = params_.aero.enabled, extra = extra_forces();
     apply_user_constraints();
     for (std::size_t n = 0; n < count; ++n) {
         const kernels::StepContext c = make_context(steps_done_);
+        if (aero) aero_forces_stage<Parallel>();
         if (seams) seam_forces_stage<Parallel>();
         if (params_.fused) {
             const kernels::FusedFn fn = integ == Integrator::symplectic_euler
-                                            ? kernels::pick_fused<Integrator::symplectic_euler>(kernel_, wind, seams)
-                                            : kernels::pick_fused<Integrator::verlet>(kernel_, wind, seams);
+                                            ? kernels::pick_fused<Integrator::symplectic_euler>(kernel_, wind, extra)
+                                            : kernels::pick_fused<Integrator::verlet>(kernel_, wind, extra);
             for_each_block<Parallel>(cloth_, [&](std::size_t b, std::size_t begin, std::size_t end) {
                 fn(c, begin, end, b);
             });
         } else {
             for_each_block<Parallel>(cloth_, [&](std::size_t, std::size_t begin, std::size_t end) {
-                kernels::spring_forces_range(c, integ, kernel_, seams, begin, end);
+                kernels::spring_forces_range(c, integ, kernel_, extra, begin, end);
             });
             for_each_block<Parallel>(cloth_, [&](std::size_t, std::size_t begin, std::size_t end) {
                 kernels::external_forces_range(c, integ, wind, begin, end);
@@ -179,7 +181,8 @@ void Simulation::step(std::size_t count) { step_impl<true>(count); }
 void Simulation::step_serial(std::size_t count) { step_impl<false>(count); }
 
 void Simulation::run_stage(Stage stage) {
-    if (stage == Stage::seam_forces) return seam_forces_stage<true>();
+    if (stage == Stage::aero_forces) return params_.aero.enabled ? aero_forces_stage<true>() : void();
+    if (stage == Stage::seam_forces) return cloth_.seams.empty() ? void() : seam_forces_stage<true>();
     if (stage == Stage::strain_limit) return strain_limit_stage<true>(cur());
     if (stage == Stage::collide) return collide_stage<true>(cur());
     const kernels::StepContext c = make_context(steps_done_);
@@ -188,7 +191,7 @@ void Simulation::run_stage(Stage stage) {
         switch (stage) {
         case Stage::external_forces: kernels::external_forces_range(c, integ, params_.wind.enabled, begin, end); break;
         case Stage::spring_forces:
-            kernels::spring_forces_range(c, integ, kernel_, !cloth_.seams.empty(), begin, end);
+            kernels::spring_forces_range(c, integ, kernel_, extra_forces(), begin, end);
             break;
         case Stage::integrate: kernels::integrate_range(c, integ, begin, end, b); break;
         default: break;

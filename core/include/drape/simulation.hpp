@@ -55,12 +55,26 @@ struct StrainLimit {
     std::uint32_t every = 1;    ///< runs after every `every`-th substep, 1..1000 (1 = Provot: after each step)
 };
 
+/// Aerodynamic wind per triangle (seed 004 section 2.1.2): with v_rel = (mean velocity of the triangle's three
+/// particles) - wind velocity, n the unit normal and A the area,
+///   F = -1/2 rho C_d A |v_rel| (v_rel . n) n,
+/// shared equally by the three particles (each particle gets the mean of its triangles' shares, gathered, not
+/// scattered). Quadratic in speed like any drag; proportional to density, drag coefficient, area and the normal
+/// component of the relative velocity, as the seed states (its formula (4) is lost from the source text).
+struct AeroWind {
+    bool enabled = false;
+    float density = 1.2f;                        ///< rho, kg/m^3, 0..100
+    float drag_coefficient = 1.0f;               ///< C_d, 0..10
+    std::array<float, 3> velocity{0.0f, 0.0f, 5.0f}; ///< wind velocity, m/s, |each| <= 100
+};
+
 struct SimulationParams {
     float dt = 0.0f; ///< s, one substep; must be below the explicit stability bound (stability.hpp)
     Integrator integrator = Integrator::symplectic_euler;
     std::array<float, 3> gravity{0.0f, -9.81f, 0.0f}; ///< m/s^2
     float air_drag = 0.2f;                            ///< 1/s: F = -m kr v (001 eq 4), 0..100
     WindField wind;
+    AeroWind aero;
     KernelPath kernel = KernelPath::automatic;
     bool fused = true; ///< false runs each stage as its own pass (reference / per-stage profiling)
     StrainLimit strain_limit;
@@ -81,7 +95,7 @@ struct Health {
 };
 
 /// Per-stage names in step order; the same strings label bench counters and profiler zones.
-enum class Stage : std::uint8_t { seam_forces, external_forces, spring_forces, integrate, strain_limit, collide, count };
+enum class Stage : std::uint8_t { aero_forces, seam_forces, external_forces, spring_forces, integrate, strain_limit, collide, count };
 const char* stage_name(Stage stage) noexcept;
 
 class Simulation {
@@ -181,7 +195,14 @@ class Simulation {
     template <bool Parallel> void strain_limit_stage(StateBuffer& out);
     template <bool Parallel> void collide_stage(StateBuffer& out);
     template <bool Parallel> void seam_forces_stage();
-    AlignedArray<float> seam_fx_, seam_fy_, seam_fz_; ///< seam force per particle, N (allocated when there are seams)
+    template <bool Parallel> void aero_forces_stage();
+    void cook_aero();
+    /// Force per particle from aero_forces and seam_forces, N (allocated when either runs).
+    AlignedArray<float> extra_fx_, extra_fy_, extra_fz_;
+    // Aerodynamic wind (cooked when first enabled): per-triangle forces and, per particle, its triangles (CSR).
+    std::vector<float> tri_fx_, tri_fy_, tri_fz_;
+    std::vector<std::uint32_t> vertex_tri_offsets_, vertex_tris_;
+    bool extra_forces() const noexcept { return !cloth_.seams.empty() || params_.aero.enabled; }
     std::size_t grabbed_ = SIZE_MAX;
     bool grabbed_was_pinned_ = false;
     std::array<float, 3> grab_target_{};
