@@ -338,9 +338,13 @@ void ViewSession::set_strain_limit(const StrainLimit& limit) {
 }
 
 void ViewSession::set_dt(double dt) {
-    dt = std::clamp(dt, 1e-3 * dt_bound_, dt_bound_);
+    // The top of the slider is the bound itself: keep the float dt just below it (rounding to float, and the probe
+    // bound against the core's own, may differ in the last bits).
+    const double top = dt_bound_ * (1.0 - 1e-6);
+    dt = std::clamp(dt, 1e-3 * dt_bound_, top);
     SimulationParams p = sim_->params();
     p.dt = static_cast<float>(dt);
+    if (double(p.dt) > top) p.dt = std::nextafter(p.dt, 0.0f);
     try {
         sim_->set_params(p);
     } catch (const InvalidInput& e) {
