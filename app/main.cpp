@@ -96,10 +96,13 @@ int main(int argc, char** argv) {
     CLI::App* view_cmd = app.add_subcommand("view", "Real-time viewer: drag the cloth, pin particles, edit fabric, "
                                                     "physics and lighting in panels (the default with no arguments). "
                                                     "Press F1 in the window for keys.");
-    view_cmd->add_option("--scene", view.scene, "Scene to show")->check(CLI::IsMember({"hang"}))->capture_default_str();
-    view_cmd->add_option("--size", view.size, "Particles per side N (N x N particles)")
-        ->check(in_range<std::uint32_t>(2, 2048))
+    view_cmd->add_option("--scene", view.scene,
+                         "Built-in scene (hang, drape, sphere, flag, tshirt) or a scene file (.json)")
         ->capture_default_str();
+    view_cmd->add_option("--size", view.size,
+                         "Grid scenes: particles per side N (N x N) [hang: 64, others: the scene's]; tshirt: cells "
+                         "per metre [10, 1000]")
+        ->check(in_range<std::uint32_t>(2, 2048));
     view_cmd->add_option("--threads", view.threads, "Worker threads (default: all hardware threads)")
         ->check(in_range<int>(1, 256));
     view_cmd->add_option("--substeps", view.substeps,

@@ -56,6 +56,8 @@ double median(std::vector<double> v) {
 } // namespace
 
 Viewer::Viewer(const ViewOptions& options) : options_(options) {
+    // The scene first: a bad --scene or --size is reported before any window opens.
+    session_ = std::make_unique<ViewSession>(options.scene, options.size, options.threads, options.substeps);
     show_ui_ = options.ui;
     scripted_mouse = options.demo_grab;
     full_mesh_ = options.full_mesh;
@@ -84,10 +86,8 @@ Viewer::Viewer(const ViewOptions& options) : options_(options) {
     ImGui_ImplOpenGL3_Init("#version 450 core");
     imgui_ready_ = true;
 
-    session_ = std::make_unique<ViewSession>(options.size, options.threads, options.substeps);
     if (options.start_paused) session_->set_running(false);
     sync_gpu();
-    reset_camera();
     glfwGetCursorPos(window_, &cursor_x_, &cursor_y_);
     window_start_ = clock_type::now();
 }
@@ -96,6 +96,7 @@ Viewer::~Viewer() {
     // GPU objects first, while the context lives.
     renderer_.reset();
     stage_.reset();
+    colliders_.reset();
     if (imgui_ready_) {
         ImGui_ImplOpenGL3_Shutdown();
         ImGui_ImplGlfw_Shutdown();
@@ -128,17 +129,24 @@ Eigen::Matrix4f Viewer::view_projection() const {
 }
 
 void Viewer::reset_camera() {
-    // Frame where scene "hang" spends its time: hanging from its pinned edge (z = -s/2) down to about y = -s, swinging
-    // a little towards +z. (It starts flat at y = 0 and falls within the first second.)
-    const float s = session_->cloth_size();
+    // Frame the scene's box: the cloth where it starts and the colliders; a cloth pinned along one edge is framed
+    // where it will hang (ViewSession::frame_lo). Seen from the front, right and a little above.
     camera_.yaw = 0.62f;
     camera_.pitch = 0.30f;
     camera_.fov_y_deg = 40.0f;
+    const SimulationParams& p = session_->sim().params();
+    if (p.aero.enabled && std::hypot(p.aero.velocity[0], p.aero.velocity[2]) > 0.0f) {
+        // A flag flies downwind: look at it from the side of the wind and from above, to see its surface.
+        const float wind_yaw = std::atan2(p.aero.velocity[0], p.aero.velocity[2]);
+        camera_.yaw = wind_yaw + 1.0f;
+        camera_.pitch = 0.6f;
+    }
     int w = 1, h = 1;
     glfwGetWindowSize(window_, &w, &h);
     const float free_aspect = float(std::max(w - static_cast<int>(panel_width()), 1)) / float(std::max(h, 1));
-    camera_.frame(Eigen::Vector3f(-0.55f * s, -1.05f * s, -0.75f * s), Eigen::Vector3f(0.55f * s, 0.05f * s, 0.25f * s),
-                  free_aspect);
+    const auto lo = session_->frame_lo(), hi = session_->frame_hi();
+    camera_.frame(Eigen::Vector3f(lo[0], lo[1], lo[2]), Eigen::Vector3f(hi[0], hi[1], hi[2]), free_aspect);
+    camera_.distance *= 0.85f; // the bounding sphere is loose around a sheet
 }
 
 void Viewer::sync_gpu() {
@@ -153,8 +161,6 @@ void Viewer::sync_gpu() {
                                                             session_->publisher().plane_floats(), columns, rows,
                                                             full_mesh_);
         gpu_full_mesh_ = full_mesh_;
-        const float s = session_->cloth_size();
-        stage_ = std::make_unique<render::Stage>(-1.25f * s, 0.0f, 0.0f, 2.5f * s, 0.1f * s);
         gpu_generation_ = session_->generation();
         gpu_markers_ = 0;
         hover_ = shown_hover_ = shown_grab_ = no_particle;
@@ -162,8 +168,24 @@ void Viewer::sync_gpu() {
         ui_size_ = static_cast<int>(session_->size());
         ui_node_mass_ = session_->fabric().node_mass_g;
     }
+    if (session_->scene_generation() != gpu_scene_) {
+        // A new scene: ground at its plane (or below what is framed), colliders, camera.
+        const auto lo = session_->frame_lo(), hi = session_->frame_hi();
+        const float extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 0.1f});
+        const float ground = session_->ground_height().value_or(lo[1] - 0.2f * extent);
+        const float spacing = std::pow(10.0f, std::round(std::log10(0.1f * extent)));
+        stage_ = std::make_unique<render::Stage>(ground, 0.5f * (lo[0] + hi[0]), 0.5f * (lo[2] + hi[2]),
+                                                 2.5f * extent, spacing);
+        colliders_ = std::make_unique<render::ColliderRenderer>(session_->sim().params().colliders);
+        // The point light: in front, to the right and above the scene, at about its size.
+        shading_.light_position = {0.5f * (lo[0] + hi[0]) + 0.9f * extent, 0.5f * (lo[1] + hi[1]) + 1.0f * extent,
+                                   0.5f * (lo[2] + hi[2]) + 1.2f * extent};
+        gpu_scene_ = session_->scene_generation();
+        reset_camera();
+    }
     const std::size_t grabbed = session_->sim().grabbed();
-    const std::size_t hover = show_pins_ ? hover_ : no_particle;
+    // Automated runs (--frames) show no hover marker: Xvfb's pointer sits wherever it is.
+    const std::size_t hover = show_pins_ && options_.frames == 0 ? hover_ : no_particle;
     if (session_->markers_version() != gpu_markers_ || grabbed != shown_grab_ || hover != shown_hover_) {
         static const std::vector<std::uint32_t> none;
         renderer_->set_markers(show_pins_ ? session_->pinned() : none, grabbed, hover);
@@ -346,7 +368,7 @@ void Viewer::update_hover() {
 void Viewer::run_demo_script() {
     // --demo-grab: half-way through --frames, press on the free corner (N-1, N-1) through the real picking path,
     // drag it up and a little to the right over 60 frames, and hold it there until the end.
-    if (!options_.demo_grab || options_.frames == 0) return;
+    if (!options_.demo_grab || options_.frames == 0 || !session_->grid_scene()) return;
     const std::uint64_t grab_frame = options_.frames / 2, drag_frames = 60;
     const std::uint64_t f = frame_index_;
     if (f < grab_frame) return;
@@ -382,6 +404,7 @@ void Viewer::draw_scene() {
     const Eigen::Matrix4f vp = view_projection();
     stage_->draw_background();
     glEnable(GL_DEPTH_TEST);
+    colliders_->draw(vp, camera_.eye(), shading_.light_position);
     renderer_->draw_cloth(vp, camera_.eye(), shading_);
     if (show_ground_) stage_->draw_ground(vp, camera_.eye());
     int ww = 1, wh = 1;

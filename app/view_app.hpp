@@ -19,6 +19,7 @@
 
 #include "camera.hpp"
 #include "cloth_renderer.hpp"
+#include "collider_renderer.hpp"
 #include "drape/picking.hpp"
 #include "stage.hpp"
 #include "view_command.hpp"
@@ -83,7 +84,9 @@ class Viewer {
     std::unique_ptr<ViewSession> session_;
     std::unique_ptr<render::ClothRenderer> renderer_;
     std::unique_ptr<render::Stage> stage_;
+    std::unique_ptr<render::ColliderRenderer> colliders_;
     std::uint64_t gpu_generation_ = 0;
+    std::uint64_t gpu_scene_ = 0;
     std::uint64_t gpu_markers_ = 0;
     render::OrbitCamera camera_;
     render::Shading shading_;

@@ -9,8 +9,9 @@
 namespace drape::app {
 
 struct ViewOptions {
-    std::string scene = "hang";
-    std::uint32_t size = 64;          ///< particles per side
+    std::string scene = "hang";       ///< built-in scene name or scene file (.json)
+    std::optional<std::uint32_t> size; ///< particles per side (grid scenes) or cells per metre (T-shirt); empty:
+                                       ///< the scene's own, 64 for "hang"
     int threads = 0;                  ///< 0 = all hardware threads
     std::optional<int> substeps;      ///< per frame; empty = automatic (real time up to a cost cap)
     int width = 1280;                 ///< window, screen coordinates

@@ -21,23 +21,27 @@ std::string fmt(double v, int precision = 3) {
     return s.str();
 }
 
-constexpr float default_total_mass = 0.1f; // kg, scene "hang" (BENCH.md)
+float spec_total_mass(const SceneSpec& s) { return s.cloth == ClothType::grid ? s.grid.total_mass : s.tshirt.total_mass; }
 
 } // namespace
 
 int ViewSession::hardware_threads() { return std::max(1, tbb::info::default_concurrency()); }
 
-ViewSession::ViewSession(std::uint32_t size, int threads, std::optional<int> substeps) : size_(size) {
-    if (size < view_min_size || size > view_max_size)
-        throw InvalidInput("--size " + std::to_string(size) + " is outside the allowed range [" +
-                           std::to_string(view_min_size) + ", " + std::to_string(view_max_size) + "]");
+ViewSession::ViewSession(const std::string& scene, std::optional<std::uint32_t> size, int threads,
+                         std::optional<int> substeps) {
+    SceneSpec spec;
+    try {
+        spec = load_scene(scene);
+    } catch (const InvalidInput& e) {
+        throw InvalidInput(std::string("--scene: ") + e.what());
+    }
     set_threads(threads > 0 ? threads : hardware_threads());
     if (substeps) {
         auto_substeps_ = false;
         substeps_ = std::clamp(*substeps, 1, view_max_substeps);
     }
-    fabric_.node_mass_g = 1000.0f * default_total_mass / float(std::size_t{size} * size);
-    rebuild(false);
+    if (!size && spec.cloth == ClothType::grid && spec.name == "hang") size = view_default_hang_size;
+    load_spec(std::move(spec), size);
     message_ = {};
 }
 
@@ -45,31 +49,81 @@ void ViewSession::post(MessageLevel level, std::string text) {
     message_ = {std::move(text), level, std::chrono::steady_clock::now()};
 }
 
+void ViewSession::load_spec(SceneSpec spec, std::optional<std::uint32_t> size) {
+    if (spec.cloth == ClothType::grid) {
+        if (size) {
+            if (*size < view_min_size || *size > view_max_size)
+                throw InvalidInput("--size: value " + std::to_string(*size) + " is outside the allowed range [" +
+                                   std::to_string(view_min_size) + ", " + std::to_string(view_max_size) + "]");
+            spec.grid.n = *size;
+        }
+        size_ = spec.grid.n;
+        total_mass_ = spec.grid.total_mass;
+    } else {
+        if (size) {
+            if (*size < view_min_cells || *size > view_max_cells)
+                throw InvalidInput("--size: value " + std::to_string(*size) + " is outside the allowed range [" +
+                                   std::to_string(view_min_cells) + ", " + std::to_string(view_max_cells) +
+                                   "] (cells per metre of the T-shirt)");
+            spec.tshirt.cells_per_metre = static_cast<float>(*size);
+        }
+        size_ = static_cast<std::uint32_t>(spec.tshirt.cells_per_metre);
+        total_mass_ = spec.tshirt.total_mass;
+    }
+    fabric_.stiffness = {spec.stiffness, spec.stiffness * spec.shear_ratio, spec.stiffness * spec.bend_ratio,
+                         spec.seam_stiffness};
+    fabric_.damping_ratio = spec.damping_ratio;
+    // Node mass: the scene's total over its particles (set exactly in rebuild, once the count is known).
+    fabric_.node_mass_g = 1000.0f * total_mass_ / float(std::max<std::size_t>(1, scene_particle_count(spec)));
+    params_ = spec.physics;
+    params_.dt = spec.dt ? *spec.dt : 0.0f;
+    auto_dt_ = !spec.dt.has_value();
+    spec_ = std::move(spec);
+    error_.clear();
+    sim_.reset();
+    rebuild(false);
+    ++scene_generation_;
+}
+
 std::array<SpringMaterial, spring_kind_count> ViewSession::materials(const FabricSettings& f) const {
     // Damping as a fraction of the critical damping of one spring between two particles: kd = r * 2 sqrt(k m / 2),
-    // the same rule scene "hang" uses, so the damping means the same at any resolution and node mass.
+    // the same rule the scenes use, so the damping means the same at any resolution and node mass.
     const float m = f.node_mass_g * 1e-3f;
-    std::array<SpringMaterial, spring_kind_count> out{}; // other kinds (seams) unused by "hang": zero
-    for (std::size_t k = 0; k < grid_spring_kinds; ++k)
+    std::array<SpringMaterial, spring_kind_count> out{};
+    for (std::size_t k = 0; k < spring_kind_count; ++k)
         out[k] = {f.stiffness[k], f.damping_ratio * 2.0f * std::sqrt(f.stiffness[k] * m * 0.5f)};
     return out;
 }
 
 double ViewSession::bound_for(const FabricSettings& f, float air_drag) const {
-    // The Gershgorin bound is a maximum over particles; in a uniform grid every interior particle of an 8 x 8 grid
-    // already has all twelve springs, so a small probe cloth with the same node mass and materials gives the bound
-    // of the full cloth without copying it.
-    HangParams probe = hang_;
-    probe.n = std::min<std::uint32_t>(size_, 8);
-    probe.total_mass = f.node_mass_g * 1e-3f * float(probe.n * probe.n);
-    probe.pins = drape::GridPins::none;
-    SceneBuild s = build_hang_scene(probe);
-    apply_materials(s.cloth, materials(f));
-    return stability_bound(s.cloth, air_drag).dt_max;
+    if (grid_scene()) {
+        // The Gershgorin bound is a maximum over particles; in a uniform grid every interior particle of an 8 x 8
+        // grid already has all twelve springs, so a small probe cloth with the same node mass and materials gives
+        // the bound of the full cloth without copying it.
+        HangParams probe = spec_.grid;
+        probe.n = std::min<std::uint32_t>(size_, 8);
+        probe.total_mass = f.node_mass_g * 1e-3f * float(probe.n * probe.n);
+        probe.pins = GridPins::none;
+        SceneBuild s = build_hang_scene(probe);
+        apply_materials(s.cloth, materials(f));
+        return stability_bound(s.cloth, air_drag).dt_max;
+    }
+    // Other cloths: the bound over a copy of the topology with every particle movable (pinned ones too: they may be
+    // unpinned later) at the new node mass.
+    const Cloth& c = sim_->cloth();
+    Cloth probe;
+    probe.particle_count = c.particle_count;
+    probe.padded_count = c.padded_count;
+    probe.inv_mass.reset(c.padded_count);
+    const float inv = 1.0f / (f.node_mass_g * 1e-3f);
+    for (std::size_t i = 0; i < c.particle_count; ++i) probe.inv_mass[i] = inv;
+    probe.edges = c.edges;
+    probe.material = materials(f);
+    return stability_bound(probe, air_drag).dt_max;
 }
 
 int ViewSession::auto_substep_count(double dt) const {
-    const double particles = double(std::size_t{size_} * size_);
+    const double particles = double(particle_count());
     const int cap = std::clamp(static_cast<int>(view_auto_budget / particles), 10, view_max_substeps);
     const int want = static_cast<int>(std::ceil(view_frame_seconds / dt - 1e-9));
     return std::clamp(want, 1, cap);
@@ -96,31 +150,96 @@ void ViewSession::rebuild(bool keep_state) {
             if (sim_->is_pinned(i)) pins.push_back(static_cast<std::uint32_t>(i));
         }
     }
-    hang_.n = size_;
-    hang_.total_mass = fabric_.node_mass_g * 1e-3f * float(std::size_t{size_} * size_);
-    hang_.stiffness = fabric_.stiffness[0];
-    hang_.damping_ratio = fabric_.damping_ratio;
-    // Corners are pinned by the viewer after construction, not by the scene: pins the user made are then all
-    // alike and any of them can be unpinned (an authored pin has no mass to restore).
-    hang_.pins = drape::GridPins::none;
-    SceneBuild scene = build_hang_scene(hang_);
-    apply_materials(scene.cloth, materials(fabric_));
-    spacing_ = hang_.size / float(size_ - 1);
+    SceneSpec spec = spec_;
+    if (spec.cloth == ClothType::grid)
+        spec.grid.n = size_;
+    else
+        spec.tshirt.cells_per_metre = static_cast<float>(size_);
+    const std::size_t count = scene_particle_count(spec);
+    if (spec.cloth == ClothType::grid)
+        spec.grid.total_mass = fabric_.node_mass_g * 1e-3f * float(count);
+    else
+        spec.tshirt.total_mass = std::clamp(fabric_.node_mass_g * 1e-3f * float(count), 0.001f, 10.0f);
+    spec.stiffness = fabric_.stiffness[0];
+    spec.damping_ratio = fabric_.damping_ratio;
+    BuiltScene scene = build_scene(spec);
+    Cloth& cloth = scene.cloth;
+    // The exact node mass now that the count is known (the T-shirt's estimate may differ).
+    fabric_.node_mass_g = 1000.0f * spec_total_mass(spec) / float(cloth.particle_count);
+    apply_materials(cloth, materials(fabric_));
+    // Pins authored by the scene become user pins: they get the node mass back and are pinned after construction,
+    // so every pin the user sees can be unpinned (the core restores an unpinned particle's authored mass).
+    std::vector<std::uint32_t> authored;
+    const float inv = 1.0f / (fabric_.node_mass_g * 1e-3f);
+    for (std::size_t i = 0; i < cloth.particle_count; ++i)
+        if (cloth.inv_mass[i] == 0.0f) {
+            authored.push_back(static_cast<std::uint32_t>(i));
+            cloth.inv_mass[i] = inv;
+        }
+    has_seams_ = false;
+    for (const Edge& e : cloth.edges) has_seams_ = has_seams_ || e.kind == SpringKind::seam;
 
-    dt_bound_ = stability_bound(scene.cloth, params_.air_drag).dt_max;
+    // Geometry the viewer frames and draws around.
+    std::array<float, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+    const InitialState& s0 = scene.initial;
+    for (std::size_t i = 0; i < cloth.particle_count; ++i) {
+        const float p[3] = {s0.x[i], s0.y[i], s0.z[i]};
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], p[a]);
+            hi[a] = std::max(hi[a], p[a]);
+        }
+    }
+    cloth_size_ = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-3f});
+    spacing_ = spec.cloth == ClothType::grid ? spec.grid.size / float(std::max<std::uint32_t>(size_, 2) - 1)
+                                             : 1.0f / float(size_);
+    if (!authored.empty() && hi[1] - lo[1] < 0.1f * cloth_size_) lo[1] = hi[1] - cloth_size_; // it will hang
+    if (params_.aero.enabled) {
+        // A pinned cloth in a steady wind flies downwind, about its own size.
+        const auto& v = params_.aero.velocity;
+        const float speed = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        if (speed > 0.0f && !authored.empty())
+            for (int k = 0; k < 3; ++k) {
+                const float d = cloth_size_ * v[k] / speed;
+                if (d > 0.0f) hi[k] += d;
+                else lo[k] += d;
+            }
+    }
+    ground_.reset();
+    for (const Collider& c : scene.params.colliders) {
+        if (c.kind == ColliderKind::plane) {
+            if (c.axis[1] > 0.99f) ground_ = c.centre[1];
+            continue;
+        }
+        float r = 0.0f;
+        std::array<float, 3> a = c.centre, b = c.centre;
+        if (c.kind == ColliderKind::sphere) r = c.size[0];
+        if (c.kind == ColliderKind::ellipsoid) r = std::max({c.size[0], c.size[1], c.size[2]});
+        if (c.kind == ColliderKind::capsule) {
+            r = c.size[0];
+            b = c.axis;
+        }
+        if (c.kind == ColliderKind::disc) {
+            r = c.size[0];
+            b[1] -= c.size[1];
+        }
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = std::min({lo[k], a[k] - r, b[k] - r});
+            hi[k] = std::max({hi[k], a[k] + r, b[k] + r});
+        }
+    }
+    frame_lo_ = lo;
+    frame_hi_ = hi;
+
+    // Run parameters: the user's (kept across rebuilds), the scene's colliders.
+    params_.colliders = scene.params.colliders;
+    dt_bound_ = stability_bound(cloth, params_.air_drag).dt_max;
     if (auto_dt_ || !(params_.dt > 0.0f) || params_.dt > dt_bound_) params_.dt = static_cast<float>(0.9 * dt_bound_);
-    if (auto_substeps_) substeps_ = auto_substep_count(params_.dt);
-
     sim_.reset();
     publisher_.reset();
-    sim_ = std::make_unique<Simulation>(std::move(scene.cloth), keep_state && !state.x.empty() ? state : scene.initial,
-                                        params_);
-    if (keep_state && !pins.empty()) {
-        for (std::uint32_t i : pins) sim_->set_pinned(i, true);
-    } else {
-        sim_->set_pinned(grid_index(size_, 0, 0), true);
-        sim_->set_pinned(grid_index(size_, size_ - 1, 0), true);
-    }
+    const bool keep = keep_state && !state.x.empty() && state.x.size() == cloth.particle_count;
+    sim_ = std::make_unique<Simulation>(std::move(scene.cloth), keep ? state : scene.initial, params_);
+    if (auto_substeps_) substeps_ = auto_substep_count(params_.dt);
+    for (std::uint32_t i : keep ? pins : authored) sim_->set_pinned(i, true);
     publisher_ = std::make_unique<Publisher>(sim_->cloth());
     ++generation_;
     refresh_pins();
@@ -165,21 +284,46 @@ void ViewSession::step_once() {
 void ViewSession::reset() {
     error_.clear();
     rebuild(false);
-    post(MessageLevel::info, "reset: flat cloth, corners pinned");
+    post(MessageLevel::info, "reset: the scene's starting state and pins, current settings");
+}
+
+void ViewSession::set_scene(const std::string& name_or_path) {
+    const auto start = std::chrono::steady_clock::now();
+    SceneSpec spec;
+    try {
+        spec = load_scene(name_or_path);
+    } catch (const InvalidInput& e) {
+        post(MessageLevel::warning, std::string("refused: ") + e.what());
+        return;
+    }
+    std::optional<std::uint32_t> size;
+    if (spec.cloth == ClothType::grid && spec.name == "hang") size = view_default_hang_size;
+    load_spec(std::move(spec), size);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    post(MessageLevel::info, "scene " + spec_.name + ": " + std::to_string(sim_->cloth().particle_count) +
+                                 " particles, built in " + fmt(ms, 3) + " ms. " + spec_.description);
 }
 
 void ViewSession::set_size(std::uint32_t n) {
-    n = std::clamp(n, view_min_size, view_max_size);
+    if (grid_scene())
+        n = std::clamp(n, view_min_size, view_max_size);
+    else
+        n = std::clamp(n, view_min_cells, view_max_cells);
     if (n == size_) return;
     const auto start = std::chrono::steady_clock::now();
     size_ = n;
-    fabric_.node_mass_g = 1000.0f * default_total_mass / float(std::size_t{n} * n);
+    SceneSpec probe = spec_;
+    if (grid_scene())
+        probe.grid.n = n;
+    else
+        probe.tshirt.cells_per_metre = static_cast<float>(n);
+    fabric_.node_mass_g = 1000.0f * total_mass_ / float(std::max<std::size_t>(1, scene_particle_count(probe)));
     error_.clear();
     rebuild(false);
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    post(MessageLevel::info, "rebuilt at " + std::to_string(n) + " x " + std::to_string(n) + " = " +
-                                 std::to_string(std::size_t{n} * n) + " particles in " + fmt(ms, 3) +
-                                 " ms; node mass " + fmt(fabric_.node_mass_g, 3) + " g (0.1 kg in total)");
+    post(MessageLevel::info, "rebuilt: " + std::to_string(sim_->cloth().particle_count) + " particles in " +
+                                 fmt(ms, 3) + " ms; node mass " + fmt(fabric_.node_mass_g, 3) + " g (" +
+                                 fmt(total_mass_, 3) + " kg in total)");
 }
 
 bool ViewSession::apply_physics(const Candidate& next, const std::string& what) {
@@ -210,7 +354,7 @@ bool ViewSession::apply_physics(const Candidate& next, const std::string& what) 
         // new materials / drag, then the new dt.
         p.dt = static_cast<float>(std::min(old_dt, new_dt));
         sim_->set_params(p);
-        for (std::size_t k = 0; k < grid_spring_kinds; ++k)
+        for (std::size_t k = 0; k < spring_kind_count; ++k)
             if (new_materials[k].stiffness != old_materials[k].stiffness ||
                 new_materials[k].damping != old_materials[k].damping)
                 sim_->set_material(static_cast<SpringKind>(k), new_materials[k]);
@@ -224,7 +368,7 @@ bool ViewSession::apply_physics(const Candidate& next, const std::string& what) 
             SimulationParams safe = sim_->params();
             safe.dt = std::min(safe.dt, old_params.dt);
             sim_->set_params(safe);
-            for (std::size_t k = 0; k < grid_spring_kinds; ++k)
+            for (std::size_t k = 0; k < spring_kind_count; ++k)
                 sim_->set_material(static_cast<SpringKind>(k), old_materials[k]);
             sim_->set_params(old_params);
         } catch (const InvalidInput&) {
@@ -256,7 +400,7 @@ void ViewSession::set_stiffness(SpringKind kind, float k) {
     k = std::clamp(k, view_min_stiffness, view_max_stiffness);
     Candidate c{fabric_, sim_->params().air_drag};
     c.fabric.stiffness[static_cast<std::size_t>(kind)] = k;
-    static const char* names[] = {"structural", "shear", "bend"};
+    static const char* names[] = {"structural", "shear", "bend", "seam"};
     apply_physics(c, std::string(names[static_cast<std::size_t>(kind)]) + " stiffness " + fmt(k, 4) + " N/m");
 }
 

@@ -20,7 +20,7 @@
 #include <tbb/global_control.h>
 
 #include "drape/publish.hpp"
-#include "drape/scene_hang.hpp"
+#include "drape/scene.hpp"
 #include "drape/simulation.hpp"
 
 namespace drape::app {
@@ -28,6 +28,11 @@ namespace drape::app {
 inline constexpr int view_max_substeps = 1000;
 inline constexpr std::uint32_t view_min_size = 2;
 inline constexpr std::uint32_t view_max_size = 2048;
+/// Resolution range of the T-shirt scene, cells per metre (as `drape run --size`).
+inline constexpr std::uint32_t view_min_cells = 10;
+inline constexpr std::uint32_t view_max_cells = 1000;
+/// Particles per side of scene "hang" in the viewer when --size is not given: real time on two cores.
+inline constexpr std::uint32_t view_default_hang_size = 64;
 /// Simulated seconds one frame aims to cover when substeps are automatic (real time at 60 FPS).
 inline constexpr double view_frame_seconds = 1.0 / 60.0;
 /// Cost cap of automatic substeps: particle-substeps per frame (about 4 ms at 2.4e8 particle-substeps/s).
@@ -38,14 +43,11 @@ inline constexpr float view_max_node_mass_g = 1.0f;
 inline constexpr float view_min_stiffness = 100.0f;
 inline constexpr float view_max_stiffness = 25000.0f;
 
-/// Spring kinds of a grid cloth the Fabric panel edits: structural, shear, bend.
-inline constexpr std::size_t grid_spring_kinds = 3;
-
 /// What the Fabric panel edits (physics part; colours live in render::Shading).
 struct FabricSettings {
-    float node_mass_g = 0.0f;                                       ///< g per particle
-    /// N/m: structural, shear, bend (the grid's three kinds; scene "hang" has no seam springs)
-    std::array<float, grid_spring_kinds> stiffness{1000.0f, 500.0f, 100.0f};
+    float node_mass_g = 0.0f; ///< g per particle
+    /// N/m per spring kind: structural, shear, bend, seam (seams only on sewn garments)
+    std::array<float, spring_kind_count> stiffness{1000.0f, 500.0f, 100.0f, 1000.0f};
     float damping_ratio = 0.05f; ///< spring damping as a fraction of critical damping of one spring (0..1)
 };
 
@@ -59,8 +61,13 @@ struct Message {
 
 class ViewSession {
   public:
-    /// Builds scene "hang" of size x size particles. threads 0 = all hardware threads; substeps empty = automatic.
-    ViewSession(std::uint32_t size, int threads, std::optional<int> substeps);
+    /// Loads a built-in scene by name or a scene file (.json) and builds it. size: particles per side of a grid
+    /// scene or cells per metre of the T-shirt (empty: the scene's own; "hang": view_default_hang_size).
+    /// threads 0 = all hardware threads; substeps empty = automatic. Throws InvalidInput naming the flag.
+    ViewSession(const std::string& scene, std::optional<std::uint32_t> size, int threads, std::optional<int> substeps);
+    /// Shorthand for scene "hang" of size x size particles (tests).
+    ViewSession(std::uint32_t size, int threads, std::optional<int> substeps)
+        : ViewSession("hang", size, threads, substeps) {}
 
     Simulation& sim() noexcept { return *sim_; }
     const Simulation& sim() const noexcept { return *sim_; }
@@ -80,9 +87,24 @@ class ViewSession {
     void step_once();
     /// Back to the initial flat cloth with the current settings (pins: the two corners again).
     void reset();
-    /// Rebuilds at a new grid size (node mass back to the scene default 0.1 kg / N^2; materials kept).
+    /// Switches to another built-in scene (or file): its own settings, flat start.
+    void set_scene(const std::string& name_or_path);
+    const SceneSpec& scene() const noexcept { return spec_; }
+    bool grid_scene() const noexcept { return spec_.cloth == ClothType::grid; }
+    /// Increases when the scene changes (the camera reframes, the ground moves).
+    std::uint64_t scene_generation() const noexcept { return scene_generation_; }
+    /// Rebuilds at a new resolution: particles per side of a grid, cells per metre of the T-shirt. The scene's total
+    /// mass is kept (so the node mass changes); materials are kept.
     void set_size(std::uint32_t n);
     std::uint32_t size() const noexcept { return size_; }
+    /// Whether the cloth has seam springs (the seam stiffness slider).
+    bool has_seams() const noexcept { return has_seams_; }
+    /// Axis-aligned box around the cloth at the start and the colliders (planes excluded), m; a cloth pinned along
+    /// one edge is extended downwards by its size (where it will hang).
+    std::array<float, 3> frame_lo() const noexcept { return frame_lo_; }
+    std::array<float, 3> frame_hi() const noexcept { return frame_hi_; }
+    /// Height of the ground plane when the scene has one (else empty).
+    std::optional<float> ground_height() const noexcept { return ground_; }
 
     // Fabric.
     const FabricSettings& fabric() const noexcept { return fabric_; }
@@ -123,9 +145,10 @@ class ViewSession {
     /// Pinned particles other than the grabbed one (for markers).
     const std::vector<std::uint32_t>& pinned() const noexcept { return pinned_; }
 
-    /// Grid spacing, m (pick radius and markers scale with it).
+    /// Typical distance between neighbouring particles, m (the pick radius scales with it).
     float spacing() const noexcept { return spacing_; }
-    float cloth_size() const noexcept { return hang_.size; }
+    /// Size of the cloth, m (the larger side of its starting box).
+    float cloth_size() const noexcept { return cloth_size_; }
 
     const Message& message() const noexcept { return message_; }
     void post(MessageLevel level, std::string text);
@@ -144,10 +167,18 @@ class ViewSession {
     bool apply_physics(const Candidate& next, const std::string& what);
     void rebuild(bool keep_state);
     void refresh_pins();
+    void load_spec(SceneSpec spec, std::optional<std::uint32_t> size);
+    std::size_t particle_count() const noexcept { return sim_ ? sim_->cloth().particle_count : 1; }
 
     std::uint32_t size_ = 64;
-    HangParams hang_;
+    SceneSpec spec_;
+    float total_mass_ = 0.1f; ///< kg, the scene's; kept across resolution changes
     FabricSettings fabric_;
+    bool has_seams_ = false;
+    float cloth_size_ = 1.0f;
+    std::array<float, 3> frame_lo_{}, frame_hi_{};
+    std::optional<float> ground_;
+    std::uint64_t scene_generation_ = 0;
     std::unique_ptr<Simulation> sim_;
     std::unique_ptr<Publisher> publisher_;
     std::unique_ptr<tbb::global_control> thread_limit_;

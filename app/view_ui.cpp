@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include <imgui.h>
 
@@ -79,15 +81,22 @@ void Viewer::ui_panels() {
         if (ImGui::Button("Step", ImVec2(70, 0))) s.step_once();
         ImGui::SameLine();
         if (ImGui::Button("Reset", ImVec2(70, 0))) s.reset();
-        int scene = 0;
-        const char* scenes[] = {"hang"};
-        ImGui::Combo("scene", &scene, scenes, 1);
-        help_marker("Square cloth, N x N particles, two corners pinned (BENCH.md scene \"hang\").");
-        ImGui::SliderInt("grid size N", &ui_size_, static_cast<int>(view_min_size), static_cast<int>(view_max_size),
-                         "%d", log_flags);
+        static const std::vector<std::string> names = builtin_scene_names();
+        const std::string& current = s.scene().name;
+        if (ImGui::BeginCombo("scene", current.c_str())) {
+            for (const std::string& n : names)
+                if (ImGui::Selectable(n.c_str(), n == current)) s.set_scene(n);
+            ImGui::EndCombo();
+        }
+        help_marker(s.scene().description.c_str());
+        const bool grid = s.grid_scene();
+        ImGui::SliderInt(grid ? "grid size N" : "cells per metre", &ui_size_,
+                         static_cast<int>(grid ? view_min_size : view_min_cells),
+                         static_cast<int>(grid ? view_max_size : view_max_cells), "%d", log_flags);
         if (ImGui::IsItemDeactivatedAfterEdit()) s.set_size(static_cast<std::uint32_t>(ui_size_));
         if (!ImGui::IsItemActive() && ui_size_ != static_cast<int>(s.size())) ui_size_ = static_cast<int>(s.size());
-        help_marker("Applied when the slider is released: the cloth is rebuilt flat (0.1 kg in total).");
+        help_marker("Applied when the slider is released: the cloth is rebuilt in its starting state with the same "
+                    "total mass and materials.");
         ImGui::Text("%s particles, %s springs", grouped(s.sim().cloth().particle_count).c_str(),
                     grouped(s.sim().cloth().spring_count()).c_str());
         ImGui::Text("simulated %.3f s  (%s substeps)", s.sim().time(), grouped(s.sim().steps_done()).c_str());
@@ -101,8 +110,9 @@ void Viewer::ui_panels() {
         if (ImGui::IsItemDeactivatedAfterEdit()) s.set_node_mass(ui_node_mass_);
         if (!ImGui::IsItemActive()) ui_node_mass_ = s.fabric().node_mass_g;
         help_marker("Mass of one particle, 0.001-1 g (seed 000). Applied on release; the motion continues.");
-        static const char* kinds[] = {"structural k", "shear k", "bend k"};
-        for (std::size_t k = 0; k < grid_spring_kinds; ++k) {
+        static const char* kinds[] = {"structural k", "shear k", "bend k", "seam k"};
+        for (std::size_t k = 0; k < spring_kind_count; ++k) {
+            if (static_cast<SpringKind>(k) == SpringKind::seam && !s.has_seams()) continue;
             float v = s.fabric().stiffness[k];
             if (ImGui::SliderFloat(kinds[k], &v, view_min_stiffness, view_max_stiffness, "%.0f N/m", log_flags))
                 s.set_stiffness(static_cast<SpringKind>(k), v);

@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "drape/errors.hpp"
 #include "drape/stability.hpp"
 #include "view_session.hpp"
 
@@ -126,4 +127,31 @@ TEST(ViewSession, ResizeRebuildsAtTheDefaultMass) {
     EXPECT_EQ(s.threads(), 1);
     s.advance();
     EXPECT_TRUE(s.sim().health().finite);
+}
+
+TEST(ViewSession, SceneFilesAndBuiltInScenes) {
+    ViewSession s("sphere", std::nullopt, 1, std::nullopt);
+    EXPECT_TRUE(s.grid_scene());
+    EXPECT_FALSE(s.sim().params().colliders.empty());
+    ASSERT_TRUE(s.ground_height().has_value());
+    EXPECT_FLOAT_EQ(*s.ground_height(), -0.5f);
+    EXPECT_LE(s.frame_lo()[1], -0.3f); // the sphere is framed
+    EXPECT_TRUE(stable(s));
+    const auto scene_gen = s.scene_generation();
+    s.set_scene("tshirt");
+    EXPECT_NE(s.scene_generation(), scene_gen);
+    EXPECT_FALSE(s.grid_scene());
+    EXPECT_TRUE(s.has_seams());
+    EXPECT_FALSE(s.publisher().grid_path());
+    EXPECT_TRUE(stable(s));
+    s.set_stiffness(SpringKind::seam, 4000.0f); // the seam slider
+    EXPECT_EQ(s.fabric().stiffness[3], 4000.0f);
+    EXPECT_TRUE(stable(s));
+    s.advance();
+    EXPECT_TRUE(s.sim().health().finite);
+    s.set_scene("no_such_scene"); // refused with a message, nothing changes
+    EXPECT_FALSE(s.grid_scene());
+    EXPECT_NE(s.message().text.find("refused"), std::string::npos);
+    EXPECT_THROW(ViewSession("tshirt", 5u, 1, std::nullopt), InvalidInput);
+    EXPECT_THROW(ViewSession("nowhere", std::nullopt, 1, std::nullopt), InvalidInput);
 }
