@@ -21,25 +21,37 @@ Simulation soft_hang(std::uint32_t n, StrainLimit limit, Integrator integ = Inte
     return Simulation(std::move(scene.cloth), scene.initial, p);
 }
 
-// Provot's projection is Gauss-Seidel over colour groups: a fixed number of passes converges locally at once but
-// propagates a global stretch only a few springs per pass, so during the fast swing the limit is approached, not met
-// (docs/garments.md has the table). At the end of 2 s of "hang" - the state BENCH.md's quality figure measures - it
-// holds to 1e-3, and at every sample the limited cloth is less stretched than the free one.
+// After the passes, every structural spring is within the limit (+1e-3), at every sample of a 1 s run of a soft
+// "hang" at N = 100 that overstretches by far without limiting. (The groups run from the pins outward, so 4 passes
+// suffice; plain Gauss-Seidel order needed more than 32: docs/garments.md.)
 TEST(StrainLimit, KeepsMaxStrainWithinTheLimitAtN100) {
     Simulation free_cloth = soft_hang(100, {0.0f, 1, 1});
-    Simulation limited = soft_hang(100, {0.1f, 8, 1});
-    const std::size_t steps = static_cast<std::size_t>(2.0 / limited.params().dt);
-    for (std::size_t done = 0; done < steps; done += 500) {
-        limited.step(500);
-        free_cloth.step(500);
-        const float lim = limited.health().max_structural_strain, fre = free_cloth.health().max_structural_strain;
-        if (fre > 0.1f) {
-            EXPECT_LT(lim, fre) << "t = " << limited.time();
-        }
+    Simulation limited = soft_hang(100, {0.1f, 4, 1});
+    const std::size_t steps = static_cast<std::size_t>(1.0 / limited.params().dt);
+    float worst = 0.0f;
+    for (std::size_t done = 0; done < steps; done += 250) {
+        limited.step(250);
+        worst = std::max(worst, limited.health().max_structural_strain);
     }
+    free_cloth.step(steps);
     EXPECT_GT(free_cloth.health().max_structural_strain, 0.1f) << "the test needs a cloth that overstretches";
-    EXPECT_LE(limited.health().max_structural_strain, 0.1f + 1e-3f);
+    EXPECT_LE(worst, 0.1f + 1e-3f);
     EXPECT_TRUE(limited.health().finite);
+}
+
+TEST(StrainLimit, SweepRunsOutwardFromThePins) {
+    Simulation sim = soft_hang(20, {0.1f, 1, 1});
+    const ColourGroups& g = sim.strain_limit_groups();
+    // Every spring touching a pinned corner is processed before every spring on the far edge (row N - 1).
+    std::size_t last_pin_group = 0, first_far_group = g.group_count();
+    for (std::size_t k = 0; k < g.group_count(); ++k)
+        for (std::uint32_t e : g.group(k)) {
+            const Edge& edge = sim.cloth().edges[e];
+            if (sim.is_pinned(edge.a) || sim.is_pinned(edge.b)) last_pin_group = std::max(last_pin_group, k);
+            if (edge.a >= 19 * 20 || edge.b >= 19 * 20) first_far_group = std::min(first_far_group, k);
+        }
+    EXPECT_LT(last_pin_group, first_far_group);
+    EXPECT_GT(g.group_count(), 19u) << "at least one group per level";
 }
 
 TEST(StrainLimit, PinnedEndsStayPut) {
@@ -61,7 +73,7 @@ TEST(StrainLimit, ColourGroupsShareNoParticleAndCoverEverySpringOnce) {
         std::set<std::uint32_t> touched;
         for (std::uint32_t e : g.group(k)) {
             seen.insert(e);
-            if (g.is_overflow(k)) continue;
+            if (sim.strain_limit_group_serial(k)) continue;
             const Edge& edge = sim.cloth().edges[e];
             EXPECT_TRUE(touched.insert(edge.a).second) << "group " << k << " reuses particle " << edge.a;
             EXPECT_TRUE(touched.insert(edge.b).second) << "group " << k << " reuses particle " << edge.b;

@@ -201,8 +201,11 @@ SceneSpec parse_scene(const std::string& text, const std::string& source) {
         const std::string plane = cloth.text("plane", {"horizontal", "vertical"}, "horizontal");
         g.plane = plane == "vertical" ? GridPlane::vertical : GridPlane::horizontal;
         g.centre = cloth.vec3("centre", 1000.0, " m", {0, 0, 0});
-        const std::string pins = cloth.text("pins", {"corners", "top_edge", "none"}, "corners");
-        g.pins = pins == "top_edge" ? GridPins::top_edge : pins == "none" ? GridPins::none : GridPins::corners;
+        const std::string pins = cloth.text("pins", {"corners", "top_edge", "left_edge", "none"}, "corners");
+        g.pins = pins == "top_edge"    ? GridPins::top_edge
+                 : pins == "left_edge" ? GridPins::left_edge
+                 : pins == "none"      ? GridPins::none
+                                       : GridPins::corners;
         // Node mass in seed 000's range 0.001 - 1 g.
         const double node_mass = double(g.total_mass) / (double(g.n) * g.n);
         if (!(node_mass >= 1e-6 * 0.999 && node_mass <= 1e-3 * 1.001))

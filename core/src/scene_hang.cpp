@@ -63,6 +63,8 @@ SceneBuild build_hang_scene(const HangParams& p) {
         inv_mass[grid_index(n, n - 1, 0)] = 0.0f;
     } else if (p.pins == GridPins::top_edge) {
         for (std::uint32_t i = 0; i < n; ++i) inv_mass[grid_index(n, i, 0)] = 0.0f;
+    } else if (p.pins == GridPins::left_edge) {
+        for (std::uint32_t j = 0; j < n; ++j) inv_mass[grid_index(n, 0, j)] = 0.0f;
     }
 
     // The stencil: 12 slots in ascending index offset (the order of a sorted CSR row).

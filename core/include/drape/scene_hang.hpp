@@ -18,6 +18,7 @@ enum class GridPlane : std::uint8_t {
 enum class GridPins : std::uint8_t {
     corners,  ///< (0,0) and (N-1,0): the two corners of row 0
     top_edge, ///< all of row 0
+    left_edge, ///< all of column 0 (a flag on its pole)
     none,
 };
 

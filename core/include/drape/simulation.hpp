@@ -47,8 +47,9 @@ struct WindField {
 };
 
 /// Provot strain limiting (seed 001 section 2; Provot 1995): after each substep, every structural, shear and seam
-/// spring longer than (1 + ratio) l0 has its ends moved toward each other (mass-weighted; pinned ends stay), colour
-/// group by colour group, `passes` times.
+/// spring longer than (1 + ratio) l0 has its ends moved toward each other, colour group by colour group, `passes`
+/// times. Groups are ordered outward from the cloth's authored pins (core/src/strain_limit.cpp), so one pass carries
+/// the correction from the pins to the free edge.
 struct StrainLimit {
     float ratio = 0.0f;         ///< critical stretch, 0 = off, 0..10 (0.1 = 10%)
     std::uint32_t passes = 4;   ///< sweeps over all groups each time it runs, 1..100
@@ -128,8 +129,10 @@ class Simulation {
     std::vector<std::string> stage_names() const;
 
     Health health() const;
-    /// Colour groups used by strain limiting (empty until strain limiting is first enabled).
+    /// Colour groups used by strain limiting, in processing order (empty until strain limiting is first enabled).
     const ColourGroups& strain_limit_groups() const noexcept { return limit_groups_; }
+    /// Whether group g is an overflow group (run serially; its springs may share particles).
+    bool strain_limit_group_serial(std::size_t g) const noexcept { return limit_serial_[g] != 0; }
     /// 64-bit FNV-1a hash of the position bits (x, y, z of particle 0, then particle 1, ...).
     std::uint64_t checksum() const noexcept;
 
@@ -189,8 +192,10 @@ class Simulation {
     // Strain limiting (cooked when first enabled): colour groups over structural, shear and seam springs, with the
     // spring ends and rest lengths copied in group order for linear sweeps.
     ColourGroups limit_groups_;
+    std::vector<std::uint8_t> limit_serial_; ///< per group: 1 = overflow group, run serially
     std::vector<std::uint32_t> limit_a_, limit_b_;
     std::vector<float> limit_rest_;
+    std::vector<std::uint8_t> limit_mode_; ///< per spring: 0 mass-weighted, 1 end a is inner (fixed), 2 end b is inner
     void cook_strain_limit();
     template <bool Parallel> void strain_limit_stage(StateBuffer& out);
     template <bool Parallel> void collide_stage(StateBuffer& out);
