@@ -87,6 +87,7 @@ def run_benchmark(args: argparse.Namespace, out_dir: Path) -> tuple[dict, Path]:
         tmp_path.unlink(missing_ok=True)
         fail(f"{bench} exited with status {proc.returncode}")
     data = load_json(tmp_path)
+    tmp_path.chmod(0o644)  # NamedTemporaryFile creates 0600
     tmp_path.replace(json_path)
     return data, json_path
 
