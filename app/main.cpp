@@ -137,6 +137,7 @@ int main(int argc, char** argv) {
     view_cmd->add_flag("--demo-grab", view.demo_grab, "Grab and drag the free corner half-way through --frames")
         ->group("");
     view_cmd->add_flag("--paused", view.start_paused, "Start paused")->group("");
+    view_cmd->add_flag("--key-help", view.key_help, "Open the F1 key help")->group("");
 
     auto is_command = [&](const std::string& name) {
         for (const CLI::App* sub : app.get_subcommands({}))

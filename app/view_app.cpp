@@ -61,6 +61,7 @@ Viewer::Viewer(const ViewOptions& options) : options_(options) {
     show_ui_ = options.ui;
     scripted_mouse = options.demo_grab;
     full_mesh_ = options.full_mesh;
+    show_help_ = options.key_help;
     window_ = render::open_window(options.width, options.height, "drape - cloth viewer", true);
     glfwSwapInterval(options.vsync ? 1 : 0);
     gl_renderer_ = reinterpret_cast<const char*>(glGetString(GL_RENDERER));

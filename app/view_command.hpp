@@ -26,6 +26,7 @@ struct ViewOptions {
     bool panels_open = false;         ///< every panel section expanded
     bool demo_grab = false;           ///< grab the free corner half-way through --frames and drag it
     bool start_paused = false;
+    bool key_help = false;            ///< the F1 key help open
 };
 
 /// Opens the viewer and runs it until the window closes or `frames` frames are drawn. Returns the exit code:

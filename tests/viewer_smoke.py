@@ -2,6 +2,9 @@
 """Viewer smoke test: runs the real viewer under Xvfb for a few frames of the default scene, saves a screenshot and
 checks the image and the --stats-json object.
 
+Also checks the command line without a display: bad flags exit 2 with one line naming the flag; no display exits 2
+with a hint to use xvfb-run.
+
 Image checks (the PNG is decoded here with zlib alone, no imaging library):
   * not blank: many distinct colours and a real spread of brightness;
   * the cloth covers a plausible share of the frame: pixels of the cloth's front (red) or back (beige) colour make up
@@ -85,6 +88,24 @@ def main():
     ap.add_argument("--keep", help="copy the screenshot here")
     args = ap.parse_args()
 
+    # The command line: bad flags exit 2 with one line naming the flag (and its range); no display exits 2 with
+    # a hint to use xvfb-run, never a crash. None of these needs a display.
+    no_display = dict(os.environ)
+    no_display.pop("DISPLAY", None)
+    no_display.pop("WAYLAND_DISPLAY", None)
+    for args_, want in ((["--size", "1"], "[2, 2048]"), (["--substeps", "0"], "--substeps"),
+                        (["--width", "10"], "--width"), (["--screenshot", "shot.jpg"], ".png"),
+                        (["--frames", "0"], "--frames"), (["--threads", "0"], "--threads"),
+                        (["--scene", "nowhere"], "--scene"), (["--scene", "tshirt", "--size", "5"], "[10, 1000]"),
+                        (["--frames", "1"], "xvfb-run")):
+        p = subprocess.run([args.drape, "view"] + args_, capture_output=True, text=True, timeout=60, env=no_display)
+        lines = p.stderr.strip().splitlines()
+        if p.returncode != 2 or len(lines) != 1 or want not in lines[0]:
+            print(f"FAIL: drape view {' '.join(args_)} -> exit {p.returncode}, stderr {p.stderr!r}; "
+                  f"expected exit 2 and one line with {want!r}")
+            return 1
+        print(f"ok: drape view {' '.join(args_)} -> {lines[0]}")
+
     xvfb = shutil.which("xvfb-run")
     if not xvfb:
         print("FAIL: xvfb-run not found; scripts/setup.sh installs xvfb (Debian package 'xvfb')")
@@ -94,7 +115,12 @@ def main():
     cmd = [xvfb, "-a", "-s", "-screen 0 1600x1000x24", args.drape, "view", "--frames", str(args.frames),
            "--screenshot", shot, "--stats-json", "--no-vsync"]
     print("running:", " ".join(cmd))
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    # Under AddressSanitizer (scripts/test.sh's asan stage) leak checking is off for the windowed run only: Mesa's
+    # llvmpipe keeps a few hundred bytes of JIT state past exit that LeakSanitizer cannot attribute (<unknown
+    # module>). drape's own leaks are covered by the windowless runs above and the unit tests.
+    env = dict(os.environ)
+    env["ASAN_OPTIONS"] = (env.get("ASAN_OPTIONS", "") + ":detect_leaks=0").lstrip(":")
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
     sys.stderr.write(proc.stderr)
     if proc.returncode != 0:
         print(f"FAIL: the viewer exited with {proc.returncode}")
