@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <sstream>
 
 #include <tbb/info.h>
@@ -17,6 +18,14 @@ namespace {
 std::string fmt(double v, int precision = 3) {
     std::ostringstream s;
     s.precision(precision);
+    s << v;
+    return s.str();
+}
+
+std::string fixed(double v, int digits) {
+    std::ostringstream s;
+    s.setf(std::ios::fixed);
+    s.precision(digits);
     s << v;
     return s.str();
 }
@@ -79,9 +88,8 @@ void ViewSession::load_spec(SceneSpec spec, std::optional<std::uint32_t> size) {
     params_.dt = spec.dt ? *spec.dt : 0.0f;
     auto_dt_ = !spec.dt.has_value();
     spec_ = std::move(spec);
-    error_.clear();
-    sim_.reset();
     rebuild(false);
+    error_.clear();
     ++scene_generation_;
 }
 
@@ -234,13 +242,14 @@ void ViewSession::rebuild(bool keep_state) {
     params_.colliders = scene.params.colliders;
     dt_bound_ = stability_bound(cloth, params_.air_drag).dt_max;
     if (auto_dt_ || !(params_.dt > 0.0f) || params_.dt > dt_bound_) params_.dt = static_cast<float>(0.9 * dt_bound_);
-    sim_.reset();
-    publisher_.reset();
+    // The new simulation is complete before it replaces the old one: if anything throws, the old one stays.
     const bool keep = keep_state && !state.x.empty() && state.x.size() == cloth.particle_count;
-    sim_ = std::make_unique<Simulation>(std::move(scene.cloth), keep ? state : scene.initial, params_);
+    auto sim = std::make_unique<Simulation>(std::move(scene.cloth), keep ? state : scene.initial, params_);
+    for (std::uint32_t i : keep ? pins : authored) sim->set_pinned(i, true);
+    auto publisher = std::make_unique<Publisher>(sim->cloth());
+    publisher_ = std::move(publisher);
+    sim_ = std::move(sim);
     if (auto_substeps_) substeps_ = auto_substep_count(params_.dt);
-    for (std::uint32_t i : keep ? pins : authored) sim_->set_pinned(i, true);
-    publisher_ = std::make_unique<Publisher>(sim_->cloth());
     ++generation_;
     refresh_pins();
 }
@@ -282,9 +291,47 @@ void ViewSession::step_once() {
 }
 
 void ViewSession::reset() {
+    if (!guarded("reset", [&] { rebuild(false); })) return;
     error_.clear();
-    rebuild(false);
     post(MessageLevel::info, "reset: the scene's starting state and pins, current settings");
+}
+
+ViewSession::Snapshot ViewSession::snapshot() const {
+    return {size_, spec_, total_mass_, fabric_, has_seams_, cloth_size_, frame_lo_, frame_hi_, ground_,
+            params_, auto_dt_, dt_bound_, substeps_, spacing_};
+}
+
+void ViewSession::restore(const Snapshot& b) {
+    size_ = b.size;
+    spec_ = b.spec;
+    total_mass_ = b.total_mass;
+    fabric_ = b.fabric;
+    has_seams_ = b.has_seams;
+    cloth_size_ = b.cloth_size;
+    frame_lo_ = b.frame_lo;
+    frame_hi_ = b.frame_hi;
+    ground_ = b.ground;
+    params_ = b.params;
+    auto_dt_ = b.auto_dt;
+    dt_bound_ = b.dt_bound;
+    substeps_ = b.substeps;
+    spacing_ = b.spacing;
+}
+
+bool ViewSession::guarded(const std::string& what, const std::function<void()>& change) {
+    // Rebuilds are transactional: on bad input or no memory the old cloth and settings stay, with a message.
+    const Snapshot before = snapshot();
+    try {
+        change();
+        return true;
+    } catch (const InvalidInput& e) {
+        restore(before);
+        post(MessageLevel::warning, "refused: " + what + ": " + e.what());
+    } catch (const std::bad_alloc&) {
+        restore(before);
+        post(MessageLevel::warning, "refused: " + what + ": out of memory");
+    }
+    return false;
 }
 
 void ViewSession::set_scene(const std::string& name_or_path) {
@@ -298,7 +345,7 @@ void ViewSession::set_scene(const std::string& name_or_path) {
     }
     std::optional<std::uint32_t> size;
     if (spec.cloth == ClothType::grid && spec.name == "hang") size = view_default_hang_size;
-    load_spec(std::move(spec), size);
+    if (!guarded("scene " + name_or_path, [&] { load_spec(std::move(spec), size); })) return;
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     post(MessageLevel::info, "scene " + spec_.name + ": " + std::to_string(sim_->cloth().particle_count) +
                                  " particles, built in " + fmt(ms, 3) + " ms. " + spec_.description);
@@ -311,15 +358,19 @@ void ViewSession::set_size(std::uint32_t n) {
         n = std::clamp(n, view_min_cells, view_max_cells);
     if (n == size_) return;
     const auto start = std::chrono::steady_clock::now();
-    size_ = n;
     SceneSpec probe = spec_;
     if (grid_scene())
         probe.grid.n = n;
     else
         probe.tshirt.cells_per_metre = static_cast<float>(n);
-    fabric_.node_mass_g = 1000.0f * total_mass_ / float(std::max<std::size_t>(1, scene_particle_count(probe)));
+    const std::string what = "resolution " + std::to_string(n);
+    if (!guarded(what, [&] {
+            size_ = n;
+            fabric_.node_mass_g = 1000.0f * total_mass_ / float(std::max<std::size_t>(1, scene_particle_count(probe)));
+            rebuild(false);
+        }))
+        return;
     error_.clear();
-    rebuild(false);
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     post(MessageLevel::info, "rebuilt: " + std::to_string(sim_->cloth().particle_count) + " particles in " +
                                  fmt(ms, 3) + " ms; node mass " + fmt(fabric_.node_mass_g, 3) + " g (" +
@@ -401,7 +452,7 @@ void ViewSession::set_stiffness(SpringKind kind, float k) {
     Candidate c{fabric_, sim_->params().air_drag};
     c.fabric.stiffness[static_cast<std::size_t>(kind)] = k;
     static const char* names[] = {"structural", "shear", "bend", "seam"};
-    apply_physics(c, std::string(names[static_cast<std::size_t>(kind)]) + " stiffness " + fmt(k, 4) + " N/m");
+    apply_physics(c, std::string(names[static_cast<std::size_t>(kind)]) + " stiffness " + fixed(k, 0) + " N/m");
 }
 
 void ViewSession::set_damping_ratio(float ratio) {
@@ -432,12 +483,15 @@ void ViewSession::set_node_mass(float grams) {
         }
     }
     const auto start = std::chrono::steady_clock::now();
-    fabric_.node_mass_g = grams;
-    params_ = sim_->params();
-    params_.dt = static_cast<float>(new_dt);
-    if (!auto_substeps_) substeps_ = new_substeps;
     const bool was_error = !error_.empty();
-    rebuild(!was_error);
+    if (!guarded("node mass " + fmt(grams) + " g", [&] {
+            fabric_.node_mass_g = grams;
+            params_ = sim_->params();
+            params_.dt = static_cast<float>(new_dt);
+            if (!auto_substeps_) substeps_ = new_substeps;
+            rebuild(!was_error);
+        }))
+        return;
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     post(new_dt < old_dt ? MessageLevel::warning : MessageLevel::info,
          "node mass " + fmt(grams) + " g (cloth rebuilt in " + fmt(ms) + " ms, motion kept); dt " + fmt(params_.dt) +

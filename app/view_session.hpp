@@ -12,6 +12,7 @@
 #include <array>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -166,6 +167,26 @@ class ViewSession {
     /// Applies a change of fabric or drag with the stability rules above; returns false if refused.
     bool apply_physics(const Candidate& next, const std::string& what);
     void rebuild(bool keep_state);
+    struct Snapshot {
+        std::uint32_t size;
+        SceneSpec spec;
+        float total_mass;
+        FabricSettings fabric;
+        bool has_seams;
+        float cloth_size;
+        std::array<float, 3> frame_lo, frame_hi;
+        std::optional<float> ground;
+        SimulationParams params;
+        bool auto_dt;
+        double dt_bound;
+        int substeps;
+        float spacing;
+    };
+    Snapshot snapshot() const;
+    void restore(const Snapshot& before);
+    /// Runs a change that rebuilds; on InvalidInput or bad_alloc restores the settings (the old simulation was never
+    /// replaced) and posts a message. Returns whether it applied.
+    bool guarded(const std::string& what, const std::function<void()>& change);
     void refresh_pins();
     void load_spec(SceneSpec spec, std::optional<std::uint32_t> size);
     std::size_t particle_count() const noexcept { return sim_ ? sim_->cloth().particle_count : 1; }
