@@ -28,13 +28,14 @@ TEST(StrainLimit, KeepsMaxStrainWithinTheLimitAtN100) {
     Simulation free_cloth = soft_hang(100, {0.0f, 1, 1});
     Simulation limited = soft_hang(100, {0.1f, 4, 1});
     const std::size_t steps = static_cast<std::size_t>(1.0 / limited.params().dt);
-    float worst = 0.0f;
+    float worst = 0.0f, worst_free = 0.0f;
     for (std::size_t done = 0; done < steps; done += 250) {
         limited.step(250);
+        free_cloth.step(250);
         worst = std::max(worst, limited.health().max_structural_strain);
+        worst_free = std::max(worst_free, free_cloth.health().max_structural_strain);
     }
-    free_cloth.step(steps);
-    EXPECT_GT(free_cloth.health().max_structural_strain, 0.1f) << "the test needs a cloth that overstretches";
+    EXPECT_GT(worst_free, 0.12f) << "the test needs a cloth that overstretches";
     EXPECT_LE(worst, 0.1f + 1e-3f);
     EXPECT_TRUE(limited.health().finite);
 }

@@ -25,10 +25,24 @@ inline void store(float* p, fbatch v) noexcept { v.store_aligned(p); }
 inline ubatch load(const std::uint32_t* p) noexcept { return ubatch::load_aligned(p); }
 inline fbatch splat(float v) noexcept { return fbatch(v); }
 
-/// a * b + c with a single rounding (explicit: the build disables implicit contraction).
-inline fbatch fma(fbatch a, fbatch b, fbatch c) noexcept { return xsimd::fma(a, b, c); }
-/// c - a * b with a single rounding.
-inline fbatch fnma(fbatch a, fbatch b, fbatch c) noexcept { return xsimd::fnma(a, b, c); }
+/// a * b + c with a single rounding (explicit: the build disables implicit contraction). xsimd 8.1 has no AVX-512
+/// fma (its generic fallback is a * b + c, two instructions and two roundings), so AVX-512 uses the intrinsic; AVX2
+/// with FMA3 goes through xsimd's fma3 kernels; a target without FMA hardware rounds twice.
+inline fbatch fma(fbatch a, fbatch b, fbatch c) noexcept {
+#if defined(__AVX512F__)
+    return fbatch(_mm512_fmadd_ps(a, b, c));
+#else
+    return xsimd::fma(a, b, c);
+#endif
+}
+/// c - a * b with a single rounding (same notes as fma).
+inline fbatch fnma(fbatch a, fbatch b, fbatch c) noexcept {
+#if defined(__AVX512F__)
+    return fbatch(_mm512_fnmadd_ps(a, b, c));
+#else
+    return xsimd::fnma(a, b, c);
+#endif
+}
 inline fbatch select(fmask m, fbatch a, fbatch b) noexcept { return xsimd::select(m, a, b); }
 
 /// 1/sqrt(x) to ~23 bits. AVX-512: rsqrt14 estimate plus one Newton-Raphson step (xsimd 8.1's own AVX-512 rsqrt
@@ -51,8 +65,9 @@ inline fmask test_bits(ubatch words, std::uint32_t bits) noexcept {
 #if defined(__AVX512F__)
     return fmask(_mm512_test_epi32_mask(words, _mm512_set1_epi32(static_cast<int>(bits))));
 #else
+    // xsimd 8.1 has no batch_bool_cast: the hit bits (below 2^24) convert exactly to float.
     const ubatch hit = words & ubatch(bits);
-    return xsimd::batch_bool_cast<float>(hit != ubatch(0u));
+    return xsimd::to_float(xsimd::bitwise_cast<xsimd::batch<std::int32_t>>(hit)) != fbatch(0.0f);
 #endif
 }
 
