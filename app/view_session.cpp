@@ -200,7 +200,21 @@ void ViewSession::rebuild(bool keep_state) {
     cloth_size_ = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-3f});
     spacing_ = spec.cloth == ClothType::grid ? spec.grid.size / float(std::max<std::uint32_t>(size_, 2) - 1)
                                              : 1.0f / float(size_);
-    if (!authored.empty() && hi[1] - lo[1] < 0.1f * cloth_size_) lo[1] = hi[1] - cloth_size_; // it will hang
+    if (!authored.empty() && hi[1] - lo[1] < 0.1f * cloth_size_) {
+        // A flat cloth held by some of its particles will hang below them: frame the pins' span, a cloth size
+        // deep, with a little room for the swing.
+        std::array<float, 3> plo{INFINITY, INFINITY, INFINITY}, phi{-INFINITY, -INFINITY, -INFINITY};
+        for (std::uint32_t i : authored) {
+            const float p[3] = {s0.x[i], s0.y[i], s0.z[i]};
+            for (int a = 0; a < 3; ++a) {
+                plo[a] = std::min(plo[a], p[a]);
+                phi[a] = std::max(phi[a], p[a]);
+            }
+        }
+        const float swing = 0.25f * cloth_size_;
+        lo = {plo[0] - swing, phi[1] - cloth_size_, plo[2] - swing};
+        hi = {phi[0] + swing, phi[1], phi[2] + swing};
+    }
     if (params_.aero.enabled) {
         // A pinned cloth in a steady wind flies downwind, about its own size.
         const auto& v = params_.aero.velocity;
