@@ -29,9 +29,12 @@ double ms_since(clock_type::time_point t) {
     return std::chrono::duration<double, std::milli>(clock_type::now() - t).count();
 }
 
-Viewer* viewer_of(GLFWwindow* w) { return static_cast<Viewer*>(glfwGetWindowUserPointer(w)); }
+Viewer* viewer_of(GLFWwindow* w) {
+    return static_cast<Viewer*>(glfwGetWindowUserPointer(w));
+}
 
-// With --demo-grab the script owns the mouse: real pointer events (Xvfb's pointer sits somewhere) are ignored.
+// With --demo-grab the script owns the mouse: real pointer events (Xvfb's pointer sits somewhere) are
+// ignored.
 bool scripted_mouse = false;
 
 void mouse_button_cb(GLFWwindow* w, int button, int action, int mods) {
@@ -40,11 +43,19 @@ void mouse_button_cb(GLFWwindow* w, int button, int action, int mods) {
 void cursor_cb(GLFWwindow* w, double x, double y) {
     if (!scripted_mouse) viewer_of(w)->on_cursor(x, y);
 }
-void scroll_cb(GLFWwindow* w, double, double dy) { viewer_of(w)->on_scroll(dy); }
-void key_cb(GLFWwindow* w, int key, int, int action, int mods) { viewer_of(w)->on_key(key, action, mods); }
+void scroll_cb(GLFWwindow* w, double, double dy) {
+    viewer_of(w)->on_scroll(dy);
+}
+void key_cb(GLFWwindow* w, int key, int, int action, int mods) {
+    viewer_of(w)->on_key(key, action, mods);
+}
 
-bool ui_wants_mouse() { return ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureMouse; }
-bool ui_wants_keyboard() { return ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureKeyboard; }
+bool ui_wants_mouse() {
+    return ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureMouse;
+}
+bool ui_wants_keyboard() {
+    return ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureKeyboard;
+}
 
 double median(std::vector<double> v) {
     if (v.empty()) return 0.0;
@@ -112,26 +123,29 @@ float Viewer::aspect() const {
     return h > 0 ? float(w) / float(h) : 1.0f;
 }
 
-float Viewer::panel_width() const { return show_ui_ ? 348.0f : 0.0f; }
+float Viewer::panel_width() const {
+    return show_ui_ ? 348.0f : 0.0f;
+}
 
 Eigen::Matrix4f Viewer::view_projection() const {
-    // The scene is centred in the part of the window right of the panel column: the projection is shifted in x by
-    // that column's width (in NDC units) and its aspect is that of the free area. Picking unprojects through the
-    // same matrix, so it stays exact.
+    // The scene is centred in the part of the window right of the panel column: the projection is shifted in
+    // x by that column's width (in NDC units) and its aspect is that of the free area. Picking unprojects
+    // through the same matrix, so it stays exact.
     int w = 1, h = 1;
     glfwGetWindowSize(window_, &w, &h);
     const float panel = std::min(panel_width(), 0.5f * float(w));
     const float free_aspect = float(std::max(w - static_cast<int>(panel), 1)) / float(std::max(h, 1));
     Eigen::Matrix4f shift = Eigen::Matrix4f::Identity();
     shift(0, 3) = panel / float(std::max(w, 1));
-    // Keep the horizontal scale of the free area: x_ndc spans the free width, i.e. (w - panel) / w of the window.
+    // Keep the horizontal scale of the free area: x_ndc spans the free width, i.e. (w - panel) / w of the
+    // window.
     shift(0, 0) = float(std::max(w - static_cast<int>(panel), 1)) / float(std::max(w, 1));
     return shift * camera_.projection(free_aspect) * camera_.view();
 }
 
 void Viewer::reset_camera() {
-    // Frame the scene's box: the cloth where it starts and the colliders; a cloth pinned along one edge is framed
-    // where it will hang (ViewSession::frame_lo). Seen from the front, right and a little above.
+    // Frame the scene's box: the cloth where it starts and the colliders; a cloth pinned along one edge is
+    // framed where it will hang (ViewSession::frame_lo). Seen from the front, right and a little above.
     camera_.yaw = 0.62f;
     camera_.pitch = 0.30f;
     camera_.fov_y_deg = 40.0f;
@@ -152,15 +166,16 @@ void Viewer::reset_camera() {
 
 void Viewer::sync_gpu() {
     if (session_->generation() != gpu_generation_ || full_mesh_ != gpu_full_mesh_) {
-        // A new cloth: new ring, index buffer and markers. Wait for the GPU to let go of the old buffers first.
+        // A new cloth: new ring, index buffer and markers. Wait for the GPU to let go of the old buffers
+        // first.
         glFinish();
         renderer_.reset();
         const Simulation& sim = session_->sim();
         const std::uint32_t columns = sim.cloth().grid ? sim.cloth().grid->columns : 0;
         const std::uint32_t rows = sim.cloth().grid ? sim.cloth().grid->rows : 0;
         renderer_ = std::make_unique<render::ClothRenderer>(sim.cloth().triangles, sim.cloth().particle_count,
-                                                            session_->publisher().plane_floats(), columns, rows,
-                                                            full_mesh_);
+                                                            session_->publisher().plane_floats(), columns,
+                                                            rows, full_mesh_);
         gpu_full_mesh_ = full_mesh_;
         gpu_generation_ = session_->generation();
         gpu_markers_ = 0;
@@ -179,7 +194,8 @@ void Viewer::sync_gpu() {
                                                  2.5f * extent, spacing);
         colliders_ = std::make_unique<render::ColliderRenderer>(session_->sim().params().colliders);
         // The point light: in front, to the right and above the scene, at about its size.
-        shading_.light_position = {0.5f * (lo[0] + hi[0]) + 0.9f * extent, 0.5f * (lo[1] + hi[1]) + 1.0f * extent,
+        shading_.light_position = {0.5f * (lo[0] + hi[0]) + 0.9f * extent,
+                                   0.5f * (lo[1] + hi[1]) + 1.0f * extent,
                                    0.5f * (lo[2] + hi[2]) + 1.2f * extent};
         gpu_scene_ = session_->scene_generation();
         reset_camera();
@@ -205,7 +221,8 @@ Ray Viewer::cursor_ray(double x, double y) const {
 
 PickHit Viewer::pick_at(double x, double y) const {
     const Simulation& sim = session_->sim();
-    // Each particle is a sphere of 0.6 grid spacings: neighbouring spheres overlap, so the whole cloth is pickable.
+    // Each particle is a sphere of 0.6 grid spacings: neighbouring spheres overlap, so the whole cloth is
+    // pickable.
     return pick_particle(cursor_ray(x, y), sim.x(), sim.y(), sim.z(), 0.6f * session_->spacing());
 }
 
@@ -263,7 +280,8 @@ void Viewer::on_cursor(double x, double y) {
         if (session_->sim().grabbed() == SIZE_MAX) {
             drag_ = Drag::none; // pinned with P: the mouse is free again
         } else {
-            const Eigen::Vector3f t = point_at_depth(cursor_ray(x, y), camera_.eye(), camera_.forward(), grab_depth_);
+            const Eigen::Vector3f t =
+                point_at_depth(cursor_ray(x, y), camera_.eye(), camera_.forward(), grab_depth_);
             session_->move_grab({t.x(), t.y(), t.z()});
         }
         break;
@@ -356,7 +374,8 @@ void Viewer::frame_input(double wall_dt) {
 }
 
 void Viewer::update_hover() {
-    // Hover marker: what a click would grab. Picking scans every particle, so it runs only when the cursor moved.
+    // Hover marker: what a click would grab. Picking scans every particle, so it runs only when the cursor
+    // moved.
     if (!cursor_moved_ || drag_ != Drag::none) return;
     cursor_moved_ = false;
     if (ui_wants_mouse()) {
@@ -367,8 +386,8 @@ void Viewer::update_hover() {
 }
 
 void Viewer::run_demo_script() {
-    // --demo-grab: half-way through --frames, press on the free corner (N-1, N-1) through the real picking path,
-    // drag it up and a little to the right over 60 frames, and hold it there until the end.
+    // --demo-grab: half-way through --frames, press on the free corner (N-1, N-1) through the real picking
+    // path, drag it up and a little to the right over 60 frames, and hold it there until the end.
     if (!options_.demo_grab || options_.frames == 0 || !session_->grid_scene()) return;
     const std::uint64_t grab_frame = options_.frames / 2, drag_frames = 60;
     const std::uint64_t f = frame_index_;
@@ -389,8 +408,8 @@ void Viewer::run_demo_script() {
         drag_ = Drag::none;
         const PickHit hit = pick_at(start_x, start_y);
         if (hit.hit()) start_grab(hit, start_x, start_y);
-        std::fprintf(stderr, "demo-grab: corner %zu at pixel (%.0f, %.0f) -> picked %zu\n", corner, start_x, start_y,
-                     hit.index);
+        std::fprintf(stderr, "demo-grab: corner %zu at pixel (%.0f, %.0f) -> picked %zu\n", corner, start_x,
+                     start_y, hit.index);
         return;
     }
     const double t = std::min(1.0, double(f - grab_frame) / double(drag_frames));
@@ -454,7 +473,8 @@ int Viewer::run() {
         if (!last_publish_.finite) {
             // Cannot happen after a finite step (the core checks); never draw garbage if it does.
             session_->set_running(false);
-            session_->post(MessageLevel::error, "non-finite vertex data; drawing paused - press Backspace to reset");
+            session_->post(MessageLevel::error,
+                           "non-finite vertex data; drawing paused - press Backspace to reset");
             had_error_ = true;
         }
 
@@ -511,7 +531,8 @@ int Viewer::run() {
         if (last_frame) break;
     }
     if (options_.frames == 0 && !final_screenshot.empty()) {
-        // Interactive run with --screenshot: the last frame drawn is still in the front buffer; redraw it once.
+        // Interactive run with --screenshot: the last frame drawn is still in the front buffer; redraw it
+        // once.
         glfwPollEvents();
         ImGui_ImplOpenGL3_NewFrame();
         ImGui_ImplGlfw_NewFrame();
@@ -545,8 +566,8 @@ void Viewer::print_stats_json() const {
     const Simulation& s = session_->sim();
     nlohmann::ordered_json j;
     j["fps"] = frame_ms > 0.0 ? 1000.0 / frame_ms : 0.0;
-    j["frame_ms"] = {{"sim", median(sim)}, {"publish", median(publish)}, {"draw", median(draw)},
-                     {"fence_wait", median(wait)}, {"swap", median(swap)}, {"total", frame_ms}};
+    j["frame_ms"] = {{"sim", median(sim)},         {"publish", median(publish)}, {"draw", median(draw)},
+                     {"fence_wait", median(wait)}, {"swap", median(swap)},       {"total", frame_ms}};
     j["particles"] = s.cloth().particle_count;
     j["springs"] = s.cloth().spring_count();
     j["substeps_per_frame"] = session_->substeps();

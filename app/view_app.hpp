@@ -1,11 +1,13 @@
-// The viewer: a GLFW window with an OpenGL 4.5 core context, the frame loop, mouse and keyboard, and the Dear ImGui
-// panels (view_ui.cpp). One frame:
+// The viewer: a GLFW window with an OpenGL 4.5 core context, the frame loop, mouse and keyboard, and the Dear
+// ImGui panels (view_ui.cpp). One frame:
 //
 //   poll input -> panels (changes apply now) -> simulate `substeps` substeps (oneTBB, all threads)
-//   -> wait for the next ring region's fence -> output stage writes positions + normals into it (oneTBB + SIMD)
+//   -> wait for the next ring region's fence -> output stage writes positions + normals into it (oneTBB +
+//   SIMD)
 //   -> draw background, ground, cloth, markers, panels -> fence the region -> swap
 //
-// Timings of the three parts (sim, publish, draw; the fence wait counts as draw) feed the overlay and --stats-json.
+// Timings of the three parts (sim, publish, draw; the fence wait counts as draw) feed the overlay and
+// --stats-json.
 #pragma once
 
 #include <array>
@@ -116,7 +118,7 @@ class Viewer {
     // Stats.
     std::uint64_t frame_index_ = 0;
     FrameTimes last_;
-    FrameTimes shown_;       ///< averaged over ~0.5 s for the overlay
+    FrameTimes shown_; ///< averaged over ~0.5 s for the overlay
     double shown_fps_ = 0.0;
     FrameTimes window_sum_;
     int window_frames_ = 0;

@@ -1,5 +1,6 @@
-// `drape view`: the real-time viewer (and `drape` with no arguments). Options and entry point; the viewer itself is in
-// view_app.hpp (window, input, frame loop), view_ui.cpp (panels) and view_session.hpp (simulation and settings).
+// `drape view`: the real-time viewer (and `drape` with no arguments). Options and entry point; the viewer
+// itself is in view_app.hpp (window, input, frame loop), view_ui.cpp (panels) and view_session.hpp
+// (simulation and settings).
 #pragma once
 
 #include <cstdint>
@@ -9,24 +10,24 @@
 namespace drape::app {
 
 struct ViewOptions {
-    std::string scene = "hang";       ///< built-in scene name or scene file (.json)
-    std::optional<std::uint32_t> size; ///< particles per side (grid scenes) or cells per metre (T-shirt); empty:
-                                       ///< the scene's own, 64 for "hang"
-    int threads = 0;                  ///< 0 = all hardware threads
-    std::optional<int> substeps;      ///< per frame; empty = automatic (real time up to a cost cap)
-    int width = 1280;                 ///< window, screen coordinates
+    std::string scene = "hang";        ///< built-in scene name or scene file (.json)
+    std::optional<std::uint32_t> size; ///< particles per side (grid scenes) or cells per metre (T-shirt);
+                                       ///< empty: the scene's own, 64 for "hang"
+    int threads = 0;             ///< 0 = all hardware threads
+    std::optional<int> substeps; ///< per frame; empty = automatic (real time up to a cost cap)
+    int width = 1280;            ///< window, screen coordinates
     int height = 800;
     bool vsync = true;
-    std::uint64_t frames = 0;         ///< 0 = until the window is closed
-    std::string screenshot;           ///< PNG written from the last frame
-    bool stats_json = false;          ///< one JSON object on stdout at exit
-    bool ui = true;                   ///< panels and overlay
-    bool full_mesh = false;           ///< draw every triangle (no level of detail for fine grids)
+    std::uint64_t frames = 0; ///< 0 = until the window is closed
+    std::string screenshot;   ///< PNG written from the last frame
+    bool stats_json = false;  ///< one JSON object on stdout at exit
+    bool ui = true;           ///< panels and overlay
+    bool full_mesh = false;   ///< draw every triangle (no level of detail for fine grids)
     // Hidden automation hooks (documentation screenshots, tests).
-    bool panels_open = false;         ///< every panel section expanded
-    bool demo_grab = false;           ///< grab the free corner half-way through --frames and drag it
+    bool panels_open = false; ///< every panel section expanded
+    bool demo_grab = false;   ///< grab the free corner half-way through --frames and drag it
     bool start_paused = false;
-    bool key_help = false;            ///< the F1 key help open
+    bool key_help = false; ///< the F1 key help open
 };
 
 /// Opens the viewer and runs it until the window closes or `frames` frames are drawn. Returns the exit code:

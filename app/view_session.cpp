@@ -30,11 +30,15 @@ std::string fixed(double v, int digits) {
     return s.str();
 }
 
-float spec_total_mass(const SceneSpec& s) { return s.cloth == ClothType::grid ? s.grid.total_mass : s.tshirt.total_mass; }
+float spec_total_mass(const SceneSpec& s) {
+    return s.cloth == ClothType::grid ? s.grid.total_mass : s.tshirt.total_mass;
+}
 
 } // namespace
 
-int ViewSession::hardware_threads() { return std::max(1, tbb::info::default_concurrency()); }
+int ViewSession::hardware_threads() {
+    return std::max(1, tbb::info::default_concurrency());
+}
 
 ViewSession::ViewSession(const std::string& scene, std::optional<std::uint32_t> size, int threads,
                          std::optional<int> substeps) {
@@ -62,8 +66,9 @@ void ViewSession::load_spec(SceneSpec spec, std::optional<std::uint32_t> size) {
     if (spec.cloth == ClothType::grid) {
         if (size) {
             if (*size < view_min_size || *size > view_max_size)
-                throw InvalidInput("--size: value " + std::to_string(*size) + " is outside the allowed range [" +
-                                   std::to_string(view_min_size) + ", " + std::to_string(view_max_size) + "]");
+                throw InvalidInput("--size: value " + std::to_string(*size) +
+                                   " is outside the allowed range [" + std::to_string(view_min_size) + ", " +
+                                   std::to_string(view_max_size) + "]");
             spec.grid.n = *size;
         }
         size_ = spec.grid.n;
@@ -71,9 +76,9 @@ void ViewSession::load_spec(SceneSpec spec, std::optional<std::uint32_t> size) {
     } else {
         if (size) {
             if (*size < view_min_cells || *size > view_max_cells)
-                throw InvalidInput("--size: value " + std::to_string(*size) + " is outside the allowed range [" +
-                                   std::to_string(view_min_cells) + ", " + std::to_string(view_max_cells) +
-                                   "] (cells per metre of the T-shirt)");
+                throw InvalidInput("--size: value " + std::to_string(*size) +
+                                   " is outside the allowed range [" + std::to_string(view_min_cells) + ", " +
+                                   std::to_string(view_max_cells) + "] (cells per metre of the T-shirt)");
             spec.tshirt.cells_per_metre = static_cast<float>(*size);
         }
         size_ = static_cast<std::uint32_t>(spec.tshirt.cells_per_metre);
@@ -94,8 +99,8 @@ void ViewSession::load_spec(SceneSpec spec, std::optional<std::uint32_t> size) {
 }
 
 std::array<SpringMaterial, spring_kind_count> ViewSession::materials(const FabricSettings& f) const {
-    // Damping as a fraction of the critical damping of one spring between two particles: kd = r * 2 sqrt(k m / 2),
-    // the same rule the scenes use, so the damping means the same at any resolution and node mass.
+    // Damping as a fraction of the critical damping of one spring between two particles: kd = r * 2 sqrt(k m
+    // / 2), the same rule the scenes use, so the damping means the same at any resolution and node mass.
     const float m = f.node_mass_g * 1e-3f;
     std::array<SpringMaterial, spring_kind_count> out{};
     for (std::size_t k = 0; k < spring_kind_count; ++k)
@@ -105,9 +110,9 @@ std::array<SpringMaterial, spring_kind_count> ViewSession::materials(const Fabri
 
 double ViewSession::bound_for(const FabricSettings& f, float air_drag) const {
     if (grid_scene()) {
-        // The Gershgorin bound is a maximum over particles; in a uniform grid every interior particle of an 8 x 8
-        // grid already has all twelve springs, so a small probe cloth with the same node mass and materials gives
-        // the bound of the full cloth without copying it.
+        // The Gershgorin bound is a maximum over particles; in a uniform grid every interior particle of an 8
+        // x 8 grid already has all twelve springs, so a small probe cloth with the same node mass and
+        // materials gives the bound of the full cloth without copying it.
         HangParams probe = spec_.grid;
         probe.n = std::min<std::uint32_t>(size_, 8);
         probe.total_mass = f.node_mass_g * 1e-3f * float(probe.n * probe.n);
@@ -116,15 +121,16 @@ double ViewSession::bound_for(const FabricSettings& f, float air_drag) const {
         apply_materials(s.cloth, materials(f));
         return stability_bound(s.cloth, air_drag).dt_max;
     }
-    // Other cloths: the bound over a copy of the topology with every particle movable (pinned ones too: they may be
-    // unpinned later) at the new node mass.
+    // Other cloths: the bound over a copy of the topology with every particle movable (pinned ones too: they
+    // may be unpinned later) at the new node mass.
     const Cloth& c = sim_->cloth();
     Cloth probe;
     probe.particle_count = c.particle_count;
     probe.padded_count = c.padded_count;
     probe.inv_mass.reset(c.padded_count);
     const float inv = 1.0f / (f.node_mass_g * 1e-3f);
-    for (std::size_t i = 0; i < c.particle_count; ++i) probe.inv_mass[i] = inv;
+    for (std::size_t i = 0; i < c.particle_count; ++i)
+        probe.inv_mass[i] = inv;
     probe.edges = c.edges;
     probe.material = materials(f);
     return stability_bound(probe, air_drag).dt_max;
@@ -175,8 +181,9 @@ void ViewSession::rebuild(bool keep_state) {
     // The exact node mass now that the count is known (the T-shirt's estimate may differ).
     fabric_.node_mass_g = 1000.0f * spec_total_mass(spec) / float(cloth.particle_count);
     apply_materials(cloth, materials(fabric_));
-    // Pins authored by the scene become user pins: they get the node mass back and are pinned after construction,
-    // so every pin the user sees can be unpinned (the core restores an unpinned particle's authored mass).
+    // Pins authored by the scene become user pins: they get the node mass back and are pinned after
+    // construction, so every pin the user sees can be unpinned (the core restores an unpinned particle's
+    // authored mass).
     std::vector<std::uint32_t> authored;
     const float inv = 1.0f / (fabric_.node_mass_g * 1e-3f);
     for (std::size_t i = 0; i < cloth.particle_count; ++i)
@@ -185,7 +192,8 @@ void ViewSession::rebuild(bool keep_state) {
             cloth.inv_mass[i] = inv;
         }
     has_seams_ = false;
-    for (const Edge& e : cloth.edges) has_seams_ = has_seams_ || e.kind == SpringKind::seam;
+    for (const Edge& e : cloth.edges)
+        has_seams_ = has_seams_ || e.kind == SpringKind::seam;
 
     // Geometry the viewer frames and draws around.
     std::array<float, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
@@ -222,8 +230,10 @@ void ViewSession::rebuild(bool keep_state) {
         if (speed > 0.0f && !authored.empty())
             for (int k = 0; k < 3; ++k) {
                 const float d = cloth_size_ * v[k] / speed;
-                if (d > 0.0f) hi[k] += d;
-                else lo[k] += d;
+                if (d > 0.0f)
+                    hi[k] += d;
+                else
+                    lo[k] += d;
             }
     }
     ground_.reset();
@@ -255,11 +265,13 @@ void ViewSession::rebuild(bool keep_state) {
     // Run parameters: the user's (kept across rebuilds), the scene's colliders.
     params_.colliders = scene.params.colliders;
     dt_bound_ = stability_bound(cloth, params_.air_drag).dt_max;
-    if (auto_dt_ || !(params_.dt > 0.0f) || params_.dt > dt_bound_) params_.dt = static_cast<float>(0.9 * dt_bound_);
+    if (auto_dt_ || !(params_.dt > 0.0f) || params_.dt > dt_bound_)
+        params_.dt = static_cast<float>(0.9 * dt_bound_);
     // The new simulation is complete before it replaces the old one: if anything throws, the old one stays.
     const bool keep = keep_state && !state.x.empty() && state.x.size() == cloth.particle_count;
     auto sim = std::make_unique<Simulation>(std::move(scene.cloth), keep ? state : scene.initial, params_);
-    for (std::uint32_t i : keep ? pins : authored) sim->set_pinned(i, true);
+    for (std::uint32_t i : keep ? pins : authored)
+        sim->set_pinned(i, true);
     auto publisher = std::make_unique<Publisher>(sim->cloth());
     publisher_ = std::move(publisher);
     sim_ = std::move(sim);
@@ -311,8 +323,8 @@ void ViewSession::reset() {
 }
 
 ViewSession::Snapshot ViewSession::snapshot() const {
-    return {size_, spec_, total_mass_, fabric_, has_seams_, cloth_size_, frame_lo_, frame_hi_, ground_,
-            params_, auto_dt_, dt_bound_, substeps_, spacing_};
+    return {size_,     spec_,   total_mass_, fabric_,  has_seams_, cloth_size_, frame_lo_,
+            frame_hi_, ground_, params_,     auto_dt_, dt_bound_,  substeps_,   spacing_};
 }
 
 void ViewSession::restore(const Snapshot& b) {
@@ -360,7 +372,8 @@ void ViewSession::set_scene(const std::string& name_or_path) {
     std::optional<std::uint32_t> size;
     if (spec.cloth == ClothType::grid && spec.name == "hang") size = view_default_hang_size;
     if (!guarded("scene " + name_or_path, [&] { load_spec(std::move(spec), size); })) return;
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     post(MessageLevel::info, "scene " + spec_.name + ": " + std::to_string(sim_->cloth().particle_count) +
                                  " particles, built in " + fmt(ms, 3) + " ms. " + spec_.description);
 }
@@ -380,12 +393,14 @@ void ViewSession::set_size(std::uint32_t n) {
     const std::string what = "resolution " + std::to_string(n);
     if (!guarded(what, [&] {
             size_ = n;
-            fabric_.node_mass_g = 1000.0f * total_mass_ / float(std::max<std::size_t>(1, scene_particle_count(probe)));
+            fabric_.node_mass_g =
+                1000.0f * total_mass_ / float(std::max<std::size_t>(1, scene_particle_count(probe)));
             rebuild(false);
         }))
         return;
     error_.clear();
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     post(MessageLevel::info, "rebuilt: " + std::to_string(sim_->cloth().particle_count) + " particles in " +
                                  fmt(ms, 3) + " ms; node mass " + fmt(fabric_.node_mass_g, 3) + " g (" +
                                  fmt(total_mass_, 3) + " kg in total)");
@@ -403,10 +418,11 @@ bool ViewSession::apply_physics(const Candidate& next, const std::string& what) 
         // Keep the simulated time per frame: substeps x dt.
         new_substeps = static_cast<int>(std::ceil(double(substeps_) * old_dt / new_dt - 1e-6));
         if (new_substeps > view_max_substeps) {
-            post(MessageLevel::warning,
-                 "refused: " + what + " needs dt <= " + fmt(bound) + " s, i.e. " + std::to_string(new_substeps) +
-                     " substeps per frame to keep the pace (max " + std::to_string(view_max_substeps) +
-                     "); lower the substeps or choose automatic substeps");
+            post(MessageLevel::warning, "refused: " + what + " needs dt <= " + fmt(bound) + " s, i.e. " +
+                                            std::to_string(new_substeps) +
+                                            " substeps per frame to keep the pace (max " +
+                                            std::to_string(view_max_substeps) +
+                                            "); lower the substeps or choose automatic substeps");
             return false;
         }
     }
@@ -415,8 +431,8 @@ bool ViewSession::apply_physics(const Candidate& next, const std::string& what) 
     SimulationParams p = sim_->params();
     const SimulationParams old_params = p;
     try {
-        // Order keeps every intermediate state stable: first the smaller dt (old materials, old drag), then the
-        // new materials / drag, then the new dt.
+        // Order keeps every intermediate state stable: first the smaller dt (old materials, old drag), then
+        // the new materials / drag, then the new dt.
         p.dt = static_cast<float>(std::min(old_dt, new_dt));
         sim_->set_params(p);
         for (std::size_t k = 0; k < spring_kind_count; ++k)
@@ -451,7 +467,8 @@ bool ViewSession::apply_physics(const Candidate& next, const std::string& what) 
     if (new_dt < old_dt) {
         note += "; dt lowered to " + fmt(new_dt) + " s (bound " + fmt(bound) + " s)";
         if (new_substeps != old_substeps)
-            note += ", substeps per frame " + std::to_string(old_substeps) + " -> " + std::to_string(new_substeps) +
+            note += ", substeps per frame " + std::to_string(old_substeps) + " -> " +
+                    std::to_string(new_substeps) +
                     (auto_substeps_ ? " (automatic)" : " to keep the simulated time per frame");
         post(MessageLevel::warning, note);
     } else {
@@ -466,7 +483,8 @@ void ViewSession::set_stiffness(SpringKind kind, float k) {
     Candidate c{fabric_, sim_->params().air_drag};
     c.fabric.stiffness[static_cast<std::size_t>(kind)] = k;
     static const char* names[] = {"structural", "shear", "bend", "seam"};
-    apply_physics(c, std::string(names[static_cast<std::size_t>(kind)]) + " stiffness " + fixed(k, 0) + " N/m");
+    apply_physics(c,
+                  std::string(names[static_cast<std::size_t>(kind)]) + " stiffness " + fixed(k, 0) + " N/m");
 }
 
 void ViewSession::set_damping_ratio(float ratio) {
@@ -490,9 +508,10 @@ void ViewSession::set_node_mass(float grams) {
     if (!auto_substeps_ && new_dt < old_dt) {
         new_substeps = static_cast<int>(std::ceil(double(substeps_) * old_dt / new_dt - 1e-6));
         if (new_substeps > view_max_substeps) {
-            post(MessageLevel::warning, "refused: node mass " + fmt(grams) + " g needs dt <= " + fmt(bound) + " s, i.e. " +
-                                            std::to_string(new_substeps) + " substeps per frame (max " +
-                                            std::to_string(view_max_substeps) + ")");
+            post(MessageLevel::warning, "refused: node mass " + fmt(grams) + " g needs dt <= " + fmt(bound) +
+                                            " s, i.e. " + std::to_string(new_substeps) +
+                                            " substeps per frame (max " + std::to_string(view_max_substeps) +
+                                            ")");
             return;
         }
     }
@@ -506,15 +525,18 @@ void ViewSession::set_node_mass(float grams) {
             rebuild(!was_error);
         }))
         return;
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     post(new_dt < old_dt ? MessageLevel::warning : MessageLevel::info,
-         "node mass " + fmt(grams) + " g (cloth rebuilt in " + fmt(ms) + " ms, motion kept); dt " + fmt(params_.dt) +
-             " s (bound " + fmt(dt_bound_) + " s), " + std::to_string(substeps_) + " substeps per frame");
+         "node mass " + fmt(grams) + " g (cloth rebuilt in " + fmt(ms) + " ms, motion kept); dt " +
+             fmt(params_.dt) + " s (bound " + fmt(dt_bound_) + " s), " + std::to_string(substeps_) +
+             " substeps per frame");
 }
 
 void ViewSession::set_gravity(const std::array<float, 3>& g) {
     SimulationParams p = sim_->params();
-    for (int i = 0; i < 3; ++i) p.gravity[i] = std::clamp(g[i], -50.0f, 50.0f);
+    for (int i = 0; i < 3; ++i)
+        p.gravity[i] = std::clamp(g[i], -50.0f, 50.0f);
     sim_->set_params(p);
     params_ = p;
 }
@@ -550,8 +572,8 @@ void ViewSession::set_strain_limit(const StrainLimit& limit) {
 }
 
 void ViewSession::set_dt(double dt) {
-    // The top of the slider is the bound itself: keep the float dt just below it (rounding to float, and the probe
-    // bound against the core's own, may differ in the last bits).
+    // The top of the slider is the bound itself: keep the float dt just below it (rounding to float, and the
+    // probe bound against the core's own, may differ in the last bits).
     const double top = dt_bound_ * (1.0 - 1e-6);
     dt = std::clamp(dt, 1e-3 * dt_bound_, top);
     SimulationParams p = sim_->params();

@@ -1,12 +1,13 @@
-// The viewer's model: the simulation, its output stage, the settings the panels edit and the rules that keep every
-// change stable. No OpenGL here.
+// The viewer's model: the simulation, its output stage, the settings the panels edit and the rules that keep
+// every change stable. No OpenGL here.
 //
-// Stability: the explicit step is stable only below a bound that falls as stiffness, damping or air drag rise and
-// as node mass falls (drape/stability.hpp). Every change that moves the bound goes through apply_physics(): the
-// substep dt follows the bound (0.9 x, unless the user fixed dt below it), and when dt must shrink the substeps per
-// frame grow so that a frame still covers the same simulated time ("compensated with more substeps"). If that would
-// need more than view_max_substeps, the change is refused. Either way the panel shows a message; the core's own
-// checks (set_material / set_params throw InvalidInput) are the last line of defence and are caught here.
+// Stability: the explicit step is stable only below a bound that falls as stiffness, damping or air drag rise
+// and as node mass falls (drape/stability.hpp). Every change that moves the bound goes through
+// apply_physics(): the substep dt follows the bound (0.9 x, unless the user fixed dt below it), and when dt
+// must shrink the substeps per frame grow so that a frame still covers the same simulated time ("compensated
+// with more substeps"). If that would need more than view_max_substeps, the change is refused. Either way the
+// panel shows a message; the core's own checks (set_material / set_params throw InvalidInput) are the last
+// line of defence and are caught here.
 #pragma once
 
 #include <array>
@@ -62,10 +63,11 @@ struct Message {
 
 class ViewSession {
   public:
-    /// Loads a built-in scene by name or a scene file (.json) and builds it. size: particles per side of a grid
-    /// scene or cells per metre of the T-shirt (empty: the scene's own; "hang": view_default_hang_size).
+    /// Loads a built-in scene by name or a scene file (.json) and builds it. size: particles per side of a
+    /// grid scene or cells per metre of the T-shirt (empty: the scene's own; "hang": view_default_hang_size).
     /// threads 0 = all hardware threads; substeps empty = automatic. Throws InvalidInput naming the flag.
-    ViewSession(const std::string& scene, std::optional<std::uint32_t> size, int threads, std::optional<int> substeps);
+    ViewSession(const std::string& scene, std::optional<std::uint32_t> size, int threads,
+                std::optional<int> substeps);
     /// Shorthand for scene "hang" of size x size particles (tests).
     ViewSession(std::uint32_t size, int threads, std::optional<int> substeps)
         : ViewSession("hang", size, threads, substeps) {}
@@ -94,14 +96,14 @@ class ViewSession {
     bool grid_scene() const noexcept { return spec_.cloth == ClothType::grid; }
     /// Increases when the scene changes (the camera reframes, the ground moves).
     std::uint64_t scene_generation() const noexcept { return scene_generation_; }
-    /// Rebuilds at a new resolution: particles per side of a grid, cells per metre of the T-shirt. The scene's total
-    /// mass is kept (so the node mass changes); materials are kept.
+    /// Rebuilds at a new resolution: particles per side of a grid, cells per metre of the T-shirt. The
+    /// scene's total mass is kept (so the node mass changes); materials are kept.
     void set_size(std::uint32_t n);
     std::uint32_t size() const noexcept { return size_; }
     /// Whether the cloth has seam springs (the seam stiffness slider).
     bool has_seams() const noexcept { return has_seams_; }
-    /// Axis-aligned box around the cloth at the start and the colliders (planes excluded), m; a cloth pinned along
-    /// one edge is extended downwards by its size (where it will hang).
+    /// Axis-aligned box around the cloth at the start and the colliders (planes excluded), m; a cloth pinned
+    /// along one edge is extended downwards by its size (where it will hang).
     std::array<float, 3> frame_lo() const noexcept { return frame_lo_; }
     std::array<float, 3> frame_hi() const noexcept { return frame_hi_; }
     /// Height of the ground plane when the scene has one (else empty).
@@ -184,8 +186,8 @@ class ViewSession {
     };
     Snapshot snapshot() const;
     void restore(const Snapshot& before);
-    /// Runs a change that rebuilds; on InvalidInput or bad_alloc restores the settings (the old simulation was never
-    /// replaced) and posts a message. Returns whether it applied.
+    /// Runs a change that rebuilds; on InvalidInput or bad_alloc restores the settings (the old simulation
+    /// was never replaced) and posts a message. Returns whether it applied.
     bool guarded(const std::string& what, const std::function<void()>& change);
     void refresh_pins();
     void load_spec(SceneSpec spec, std::optional<std::uint32_t> size);

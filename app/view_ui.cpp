@@ -1,6 +1,7 @@
-// The viewer's Dear ImGui panels: Run mode, Fabric, Physics, Lighting, Camera (seed 000's five), the stats overlay,
-// the status line and the F1 key help. Every slider is clamped to the range of SPEC.md / the issue (typed values
-// too: ImGuiSliderFlags_AlwaysClamp); changes go through ViewSession, which refuses or compensates unstable ones.
+// The viewer's Dear ImGui panels: Run mode, Fabric, Physics, Lighting, Camera (seed 000's five), the stats
+// overlay, the status line and the F1 key help. Every slider is clamped to the range of SPEC.md / the issue
+// (typed values too: ImGuiSliderFlags_AlwaysClamp); changes go through ViewSession, which refuses or
+// compensates unstable ones.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -33,7 +34,8 @@ void help_marker(const char* text) {
 bool colour_edit(const char* label, Eigen::Vector3f& c) {
     float v[3] = {c.x(), c.y(), c.z()};
     if (!ImGui::ColorEdit3(label, v, ImGuiColorEditFlags_Float | ImGuiColorEditFlags_NoInputs)) return false;
-    for (int i = 0; i < 3; ++i) v[i] = std::clamp(v[i], 0.0f, 1.0f);
+    for (int i = 0; i < 3; ++i)
+        v[i] = std::clamp(v[i], 0.0f, 1.0f);
     c = {v[0], v[1], v[2]};
     return true;
 }
@@ -63,7 +65,8 @@ void Viewer::build_ui() {
 void Viewer::ui_panels() {
     const ImGuiIO& io = ImGui::GetIO();
     ImGui::SetNextWindowPos(ImVec2(8.0f, 8.0f), ImGuiCond_Always);
-    // Fixed width, height fitted to the open sections (a smaller translucent window is cheaper for software GL).
+    // Fixed width, height fitted to the open sections (a smaller translucent window is cheaper for software
+    // GL).
     ImGui::SetNextWindowSizeConstraints(ImVec2(340.0f, 0.0f), ImVec2(340.0f, io.DisplaySize.y - 16.0f));
     ImGui::SetNextWindowBgAlpha(0.86f);
     ImGui::Begin("drape", nullptr,
@@ -73,7 +76,8 @@ void Viewer::ui_panels() {
     ViewSession& s = *session_;
     const ImGuiCond open_cond = ImGuiCond_Once;
 
-    // ---- Run mode -----------------------------------------------------------------------------------------------
+    // ---- Run mode
+    // -----------------------------------------------------------------------------------------------
     ImGui::SetNextItemOpen(true, open_cond);
     if (ImGui::CollapsingHeader("Run mode")) {
         if (ImGui::Button(s.running() ? "Pause" : "Run", ImVec2(70, 0))) s.set_running(!s.running());
@@ -94,15 +98,18 @@ void Viewer::ui_panels() {
                          static_cast<int>(grid ? view_min_size : view_min_cells),
                          static_cast<int>(grid ? view_max_size : view_max_cells), "%d", log_flags);
         if (ImGui::IsItemDeactivatedAfterEdit()) s.set_size(static_cast<std::uint32_t>(ui_size_));
-        if (!ImGui::IsItemActive() && ui_size_ != static_cast<int>(s.size())) ui_size_ = static_cast<int>(s.size());
-        help_marker("Applied when the slider is released: the cloth is rebuilt in its starting state with the same "
-                    "total mass and materials.");
+        if (!ImGui::IsItemActive() && ui_size_ != static_cast<int>(s.size()))
+            ui_size_ = static_cast<int>(s.size());
+        help_marker(
+            "Applied when the slider is released: the cloth is rebuilt in its starting state with the same "
+            "total mass and materials.");
         ImGui::Text("%s particles, %s springs", grouped(s.sim().cloth().particle_count).c_str(),
                     grouped(s.sim().cloth().spring_count()).c_str());
         ImGui::Text("simulated %.3f s  (%s substeps)", s.sim().time(), grouped(s.sim().steps_done()).c_str());
     }
 
-    // ---- Fabric -------------------------------------------------------------------------------------------------
+    // ---- Fabric
+    // -------------------------------------------------------------------------------------------------
     ImGui::SetNextItemOpen(true, open_cond);
     if (ImGui::CollapsingHeader("Fabric")) {
         ImGui::SliderFloat("node mass", &ui_node_mass_, view_min_node_mass_g, view_max_node_mass_g, "%.4f g",
@@ -114,11 +121,13 @@ void Viewer::ui_panels() {
         for (std::size_t k = 0; k < spring_kind_count; ++k) {
             if (static_cast<SpringKind>(k) == SpringKind::seam && !s.has_seams()) continue;
             float v = s.fabric().stiffness[k];
-            if (ImGui::SliderFloat(kinds[k], &v, view_min_stiffness, view_max_stiffness, "%.0f N/m", log_flags))
+            if (ImGui::SliderFloat(kinds[k], &v, view_min_stiffness, view_max_stiffness, "%.0f N/m",
+                                   log_flags))
                 s.set_stiffness(static_cast<SpringKind>(k), v);
         }
         float damping = s.fabric().damping_ratio;
-        if (ImGui::SliderFloat("damping", &damping, 0.0f, 1.0f, "%.3f", clamp_flags)) s.set_damping_ratio(damping);
+        if (ImGui::SliderFloat("damping", &damping, 0.0f, 1.0f, "%.3f", clamp_flags))
+            s.set_damping_ratio(damping);
         help_marker("Spring damping as a fraction of the critical damping of one spring.");
         colour_edit("colour", shading_.front_colour);
         ImGui::SameLine();
@@ -133,12 +142,14 @@ void Viewer::ui_panels() {
         ImGui::Checkbox("checker pattern", &shading_.checker);
     }
 
-    // ---- Physics ------------------------------------------------------------------------------------------------
+    // ---- Physics
+    // ------------------------------------------------------------------------------------------------
     ImGui::SetNextItemOpen(options_.panels_open, open_cond);
     if (ImGui::CollapsingHeader("Physics")) {
         const SimulationParams& p = s.params();
         float g[3] = {p.gravity[0], p.gravity[1], p.gravity[2]};
-        if (ImGui::SliderFloat3("gravity", g, -50.0f, 50.0f, "%.2f", clamp_flags)) s.set_gravity({g[0], g[1], g[2]});
+        if (ImGui::SliderFloat3("gravity", g, -50.0f, 50.0f, "%.2f", clamp_flags))
+            s.set_gravity({g[0], g[1], g[2]});
         help_marker("m/s^2. Earth: (0, -9.81, 0).");
         bool wind = p.wind.enabled;
         float wind_strength = p.wind.strength;
@@ -163,16 +174,19 @@ void Viewer::ui_panels() {
         ImGui::PushItemWidth(112.0f);
         limit_changed |= ImGui::SliderFloat("##limit", &limit_ratio, 0.01f, 1.0f, "%.2f stretch", log_flags);
         ImGui::PopItemWidth();
-        help_marker("Provot 1995: springs stretched beyond (1 + ratio) x rest length are pulled back after the "
-                    "substep (4 passes over the colour groups).");
-        if (limit_on) limit_changed |= ImGui::SliderInt("limit every", &limit_every, 1, 1000, "%d substeps", log_flags);
+        help_marker(
+            "Provot 1995: springs stretched beyond (1 + ratio) x rest length are pulled back after the "
+            "substep (4 passes over the colour groups).");
+        if (limit_on)
+            limit_changed |= ImGui::SliderInt("limit every", &limit_every, 1, 1000, "%d substeps", log_flags);
         if (limit_changed)
             s.set_strain_limit({limit_on ? limit_ratio : 0.0f, p.strain_limit.passes,
                                 static_cast<std::uint32_t>(std::max(limit_every, 1))});
         float dt = p.dt;
         const float bound = static_cast<float>(s.dt_bound());
         if (ImGui::SliderFloat("dt", &dt, 1e-3f * bound, bound, "%.3e s", log_flags)) s.set_dt(dt);
-        help_marker("One substep. The slider ends at the explicit stability bound: an unstable dt cannot be chosen.");
+        help_marker(
+            "One substep. The slider ends at the explicit stability bound: an unstable dt cannot be chosen.");
         bool auto_dt = s.auto_dt();
         if (ImGui::Checkbox("auto dt (0.9 x bound)", &auto_dt)) s.set_auto_dt(auto_dt);
         ImGui::TextDisabled("stability bound %.3e s", double(bound));
@@ -189,7 +203,8 @@ void Viewer::ui_panels() {
         ImGui::TextDisabled("%.2f ms simulated per frame", 1e3 * double(s.substeps()) * double(p.dt));
     }
 
-    // ---- Lighting -----------------------------------------------------------------------------------------------
+    // ---- Lighting
+    // -----------------------------------------------------------------------------------------------
     ImGui::SetNextItemOpen(options_.panels_open, open_cond);
     if (ImGui::CollapsingHeader("Lighting")) {
         float lp[3] = {shading_.light_position.x(), shading_.light_position.y(), shading_.light_position.z()};
@@ -201,15 +216,17 @@ void Viewer::ui_panels() {
         ImGui::Checkbox("ground grid (G)", &show_ground_);
     }
 
-    // ---- Camera -------------------------------------------------------------------------------------------------
+    // ---- Camera
+    // -------------------------------------------------------------------------------------------------
     ImGui::SetNextItemOpen(options_.panels_open, open_cond);
     if (ImGui::CollapsingHeader("Camera")) {
         if (ImGui::Button("Reset view (R)")) reset_camera();
         ImGui::SliderFloat("field of view", &camera_.fov_y_deg, 20.0f, 90.0f, "%.0f deg", clamp_flags);
         ImGui::Checkbox("pins and hover markers", &show_pins_);
         ImGui::Checkbox("draw every triangle", &full_mesh_);
-        help_marker("Off: grids finer than 256 x 256 are drawn through every k-th row and column (the simulation and "
-                    "the normals still use every particle). On: all triangles, slower in software GL.");
+        help_marker(
+            "Off: grids finer than 256 x 256 are drawn through every k-th row and column (the simulation and "
+            "the normals still use every particle). On: all triangles, slower in software GL.");
         if (renderer_->lod_stride() > 1)
             ImGui::TextDisabled("drawing every %u-th row: %s of %s triangles", renderer_->lod_stride(),
                                 grouped(renderer_->triangle_count()).c_str(),
@@ -229,7 +246,8 @@ void Viewer::ui_overlay() {
     ImGui::SetNextWindowBgAlpha(0.62f);
     ImGui::Begin("stats", nullptr,
                  ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoNav |
-                     ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoInputs);
+                     ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoMove |
+                     ImGuiWindowFlags_NoInputs);
     const ViewSession& s = *session_;
     const Simulation& sim = s.sim();
     ImGui::Text("%.1f FPS   (%.2f ms / frame)", shown_fps_, shown_.frame);
@@ -237,8 +255,10 @@ void Viewer::ui_overlay() {
     ImGui::Text("substeps/frame %d   dt %.3g s", s.substeps(), double(sim.params().dt));
     ImGui::Text("particles %s   springs %s", grouped(sim.cloth().particle_count).c_str(),
                 grouped(sim.cloth().spring_count()).c_str());
-    ImGui::Text("threads %d   max strain %.2f %%", s.threads(), 100.0 * double(last_publish_.max_structural_strain));
-    const double realtime = shown_.frame > 0.0 ? double(s.substeps()) * sim.params().dt / (shown_.frame * 1e-3) : 0.0;
+    ImGui::Text("threads %d   max strain %.2f %%", s.threads(),
+                100.0 * double(last_publish_.max_structural_strain));
+    const double realtime =
+        shown_.frame > 0.0 ? double(s.substeps()) * sim.params().dt / (shown_.frame * 1e-3) : 0.0;
     if (s.running())
         ImGui::TextColored(ImVec4(0.55f, 0.9f, 0.55f, 1.0f), "running   %.2fx real time", realtime);
     else
@@ -253,7 +273,8 @@ void Viewer::ui_messages() {
     if (!s.error().empty()) {
         ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x * 0.5f, 60.0f), ImGuiCond_Always, ImVec2(0.5f, 0.0f));
         ImGui::SetNextWindowBgAlpha(0.92f);
-        ImGui::Begin("simulation stopped", nullptr, ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoCollapse);
+        ImGui::Begin("simulation stopped", nullptr,
+                     ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoCollapse);
         ImGui::PushTextWrapPos(520.0f);
         ImGui::TextColored(ImVec4(1.0f, 0.45f, 0.4f, 1.0f), "%s", s.error().c_str());
         ImGui::PopTextWrapPos();
@@ -265,12 +286,14 @@ void Viewer::ui_messages() {
     const Message& m = s.message();
     const double age = std::chrono::duration<double>(std::chrono::steady_clock::now() - m.when).count();
     if (m.text.empty() || age > 8.0) return;
-    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x * 0.5f + (show_ui_ ? 170.0f : 0.0f), io.DisplaySize.y - 12.0f),
-                            ImGuiCond_Always, ImVec2(0.5f, 1.0f));
+    ImGui::SetNextWindowPos(
+        ImVec2(io.DisplaySize.x * 0.5f + (show_ui_ ? 170.0f : 0.0f), io.DisplaySize.y - 12.0f),
+        ImGuiCond_Always, ImVec2(0.5f, 1.0f));
     ImGui::SetNextWindowBgAlpha(0.75f);
     ImGui::Begin("status", nullptr,
-                 ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoInputs |
-                     ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoNav);
+                 ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_AlwaysAutoResize |
+                     ImGuiWindowFlags_NoInputs | ImGuiWindowFlags_NoFocusOnAppearing |
+                     ImGuiWindowFlags_NoNav);
     const ImVec4 colour = m.level == MessageLevel::error     ? ImVec4(1.0f, 0.45f, 0.4f, 1.0f)
                           : m.level == MessageLevel::warning ? ImVec4(1.0f, 0.8f, 0.3f, 1.0f)
                                                              : ImVec4(0.85f, 0.9f, 1.0f, 1.0f);

@@ -10,10 +10,13 @@ namespace drape::render {
 namespace {
 constexpr float pi = 3.14159265358979f;
 constexpr float max_pitch = 0.5f * pi - 0.01f;
-float radians(float deg) { return deg * pi / 180.0f; }
+float radians(float deg) {
+    return deg * pi / 180.0f;
+}
 } // namespace
 
-Eigen::Matrix4f look_at(const Eigen::Vector3f& eye, const Eigen::Vector3f& target, const Eigen::Vector3f& up) {
+Eigen::Matrix4f look_at(const Eigen::Vector3f& eye, const Eigen::Vector3f& target,
+                        const Eigen::Vector3f& up) {
     const Eigen::Vector3f f = (target - eye).normalized();
     const Eigen::Vector3f s = f.cross(up).normalized();
     const Eigen::Vector3f u = s.cross(f);
@@ -43,13 +46,21 @@ Eigen::Vector3f OrbitCamera::eye() const {
     return target + distance * Eigen::Vector3f(cp * std::sin(yaw), std::sin(pitch), cp * std::cos(yaw));
 }
 
-Eigen::Vector3f OrbitCamera::forward() const { return (target - eye()).normalized(); }
+Eigen::Vector3f OrbitCamera::forward() const {
+    return (target - eye()).normalized();
+}
 
-Eigen::Vector3f OrbitCamera::right() const { return forward().cross(Eigen::Vector3f::UnitY()).normalized(); }
+Eigen::Vector3f OrbitCamera::right() const {
+    return forward().cross(Eigen::Vector3f::UnitY()).normalized();
+}
 
-Eigen::Vector3f OrbitCamera::up() const { return right().cross(forward()); }
+Eigen::Vector3f OrbitCamera::up() const {
+    return right().cross(forward());
+}
 
-Eigen::Matrix4f OrbitCamera::view() const { return look_at(eye(), target, Eigen::Vector3f::UnitY()); }
+Eigen::Matrix4f OrbitCamera::view() const {
+    return look_at(eye(), target, Eigen::Vector3f::UnitY());
+}
 
 Eigen::Matrix4f OrbitCamera::projection(float aspect) const {
     const float near_plane = std::max(0.001f, 0.01f * distance);
@@ -67,7 +78,9 @@ void OrbitCamera::pan(float dx, float dy) {
     target += visible * (dx * right() + dy * up());
 }
 
-void OrbitCamera::zoom(float factor) { distance = std::clamp(distance * factor, min_distance, max_distance); }
+void OrbitCamera::zoom(float factor) {
+    distance = std::clamp(distance * factor, min_distance, max_distance);
+}
 
 void OrbitCamera::frame(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float aspect) {
     target = 0.5f * (lo + hi);

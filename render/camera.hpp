@@ -1,6 +1,6 @@
-// Orbit camera: rotates around a target point (yaw about +y, pitch above the horizon), pans the target in the view
-// plane and zooms by changing the distance. Matrices follow OpenGL conventions (right-handed world, y up, clip depth
-// -1..1), the same ones core's picking (drape/picking.hpp) unprojects with.
+// Orbit camera: rotates around a target point (yaw about +y, pitch above the horizon), pans the target in the
+// view plane and zooms by changing the distance. Matrices follow OpenGL conventions (right-handed world, y
+// up, clip depth -1..1), the same ones core's picking (drape/picking.hpp) unprojects with.
 #pragma once
 
 #include <Eigen/Core>
@@ -9,10 +9,10 @@ namespace drape::render {
 
 struct OrbitCamera {
     Eigen::Vector3f target = Eigen::Vector3f::Zero(); ///< m, the point orbited
-    float yaw = 0.0f;         ///< rad about +y; 0 looks from +z towards -z
-    float pitch = 0.0f;       ///< rad above the horizon, clamped to +-(pi/2 - 0.01)
-    float distance = 3.0f;    ///< m from the target, clamped to [min_distance, max_distance]
-    float fov_y_deg = 45.0f;  ///< vertical field of view, degrees, [20, 90]
+    float yaw = 0.0f;                                 ///< rad about +y; 0 looks from +z towards -z
+    float pitch = 0.0f;                               ///< rad above the horizon, clamped to +-(pi/2 - 0.01)
+    float distance = 3.0f;   ///< m from the target, clamped to [min_distance, max_distance]
+    float fov_y_deg = 45.0f; ///< vertical field of view, degrees, [20, 90]
 
     static constexpr float min_distance = 0.02f;
     static constexpr float max_distance = 500.0f;
@@ -33,8 +33,8 @@ struct OrbitCamera {
     void pan(float dx, float dy);
     /// Multiplies the distance by `factor` (< 1 moves closer).
     void zoom(float factor);
-    /// Places the target at the centre of the box [lo, hi] and backs off until the whole box is in view for the
-    /// given aspect, keeping yaw, pitch and field of view.
+    /// Places the target at the centre of the box [lo, hi] and backs off until the whole box is in view for
+    /// the given aspect, keeping yaw, pitch and field of view.
     void frame(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float aspect);
 };
 

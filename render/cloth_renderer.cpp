@@ -92,12 +92,14 @@ void main() {
 }
 )";
 
-/// Index buffer over every `stride`-th row and column of a columns x rows grid (last ones included), with the same
-/// triangulation as scene "hang" (cells split by the (i+1, j)-(i, j+1) diagonal, counter-clockwise from +normal).
+/// Index buffer over every `stride`-th row and column of a columns x rows grid (last ones included), with the
+/// same triangulation as scene "hang" (cells split by the (i+1, j)-(i, j+1) diagonal, counter-clockwise from
+/// +normal).
 std::vector<std::uint32_t> lod_triangles(std::uint32_t columns, std::uint32_t rows, std::uint32_t stride) {
     auto samples = [stride](std::uint32_t count) {
         std::vector<std::uint32_t> v;
-        for (std::uint32_t i = 0; i + 1 < count; i += stride) v.push_back(i);
+        for (std::uint32_t i = 0; i + 1 < count; i += stride)
+            v.push_back(i);
         v.push_back(count - 1);
         return v;
     };
@@ -138,7 +140,8 @@ ClothRenderer::ClothRenderer(std::span<const std::uint32_t> triangles, std::size
     index_count_ = static_cast<GLsizei>(triangles.size());
     // Static index buffer: written once here, never again.
     glCreateBuffers(1, &index_buffer_);
-    glNamedBufferStorage(index_buffer_, static_cast<GLsizeiptr>(std::max<std::size_t>(1, triangles.size()) * 4),
+    glNamedBufferStorage(index_buffer_,
+                         static_cast<GLsizeiptr>(std::max<std::size_t>(1, triangles.size()) * 4),
                          triangles.empty() ? nullptr : triangles.data(), 0);
     glCreateBuffers(1, &marker_buffer_);
     glNamedBufferData(marker_buffer_, 64, nullptr, GL_DYNAMIC_DRAW);
@@ -190,7 +193,8 @@ void ClothRenderer::draw_cloth(const Eigen::Matrix4f& view_projection, const Eig
     glDrawElementsBaseVertex(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr, base_vertex());
 }
 
-void ClothRenderer::set_markers(std::span<const std::uint32_t> pinned, std::size_t highlight, std::size_t hover) {
+void ClothRenderer::set_markers(std::span<const std::uint32_t> pinned, std::size_t highlight,
+                                std::size_t hover) {
     std::vector<std::uint32_t> list(pinned.begin(), pinned.end());
     pinned_count_ = static_cast<GLsizei>(list.size());
     highlight_count_ = highlight < particle_count_ ? 1 : 0;

@@ -1,18 +1,18 @@
 // Draws the cloth from the vertex ring (vertex_ring.hpp) that core's output stage (drape/publish.hpp) fills:
-// six float attributes, one per plane (x, y, z, nx, ny, nz), a static index buffer of the triangles, Blinn-Phong
-// shading with a point light, two-sided (back faces get the flipped normal and optionally their own colour), and
-// round markers for pinned, grabbed and hovered particles.
+// six float attributes, one per plane (x, y, z, nx, ny, nz), a static index buffer of the triangles,
+// Blinn-Phong shading with a point light, two-sided (back faces get the flipped normal and optionally their
+// own colour), and round markers for pinned, grabbed and hovered particles.
 //
-// Level of detail: a grid cloth finer than lod_max_side x lod_max_side vertices is drawn through a coarser index
-// buffer over every k-th row and column (the last row and column always included, so the outline is exact). The
-// output stage still publishes every vertex with normals of the full mesh; only the triangles drawn are fewer.
-// llvmpipe spends ~70 ns per triangle in its vertex and setup stages on this machine, so at 1M particles (2M
-// triangles) the full mesh alone costs ~0.2 s per frame, while a 256 x 256 sampling covers the same screen area at
-// about 2 pixels per cell. set_full_detail(true) (--full-mesh) draws every triangle.
+// Level of detail: a grid cloth finer than lod_max_side x lod_max_side vertices is drawn through a coarser
+// index buffer over every k-th row and column (the last row and column always included, so the outline is
+// exact). The output stage still publishes every vertex with normals of the full mesh; only the triangles
+// drawn are fewer. llvmpipe spends ~70 ns per triangle in its vertex and setup stages on this machine, so at
+// 1M particles (2M triangles) the full mesh alone costs ~0.2 s per frame, while a 256 x 256 sampling covers
+// the same screen area at about 2 pixels per cell. set_full_detail(true) (--full-mesh) draws every triangle.
 //
-// The vertex array object is set up once: attribute p reads plane p of region 0; a frame selects its region with the
-// base vertex of glDrawElementsBaseVertex (region r starts r * region_stride_floats floats later, the same offset for
-// every plane), so nothing is rebound or copied per frame.
+// The vertex array object is set up once: attribute p reads plane p of region 0; a frame selects its region
+// with the base vertex of glDrawElementsBaseVertex (region r starts r * region_stride_floats floats later,
+// the same offset for every plane), so nothing is rebound or copied per frame.
 #pragma once
 
 #include <cstddef>
@@ -37,16 +37,17 @@ struct Shading {
     float specular = 0.25f;          ///< ks [0, 1]
     float shininess = 32.0f;         ///< Blinn-Phong exponent [1, 512]
     Eigen::Vector3f light_position{1.1f, 0.7f, 1.3f}; ///< m, world space
-    float light_intensity = 1.0f;                    ///< [0, 4]
+    float light_intensity = 1.0f;                     ///< [0, 4]
     bool checker = true; ///< faint checker pattern on grid cloths (shows the shape while it moves)
 };
 
 class ClothRenderer {
   public:
-    /// particle_count vertices laid out as publish.hpp describes (planes of plane_floats floats); grid_columns > 0
-    /// when the cloth is a grid of that many columns (enables the checker pattern).
-    ClothRenderer(std::span<const std::uint32_t> triangles, std::size_t particle_count, std::size_t plane_floats,
-                  std::uint32_t grid_columns, std::uint32_t grid_rows, bool full_detail);
+    /// particle_count vertices laid out as publish.hpp describes (planes of plane_floats floats);
+    /// grid_columns > 0 when the cloth is a grid of that many columns (enables the checker pattern).
+    ClothRenderer(std::span<const std::uint32_t> triangles, std::size_t particle_count,
+                  std::size_t plane_floats, std::uint32_t grid_columns, std::uint32_t grid_rows,
+                  bool full_detail);
 
     static constexpr std::uint32_t lod_max_side = 256;
     ~ClothRenderer();
@@ -55,7 +56,8 @@ class ClothRenderer {
 
     /// Waits for this frame's region to be free and returns it for the output stage to write.
     std::span<float> begin_frame(double* out_wait_ms = nullptr);
-    void draw_cloth(const Eigen::Matrix4f& view_projection, const Eigen::Vector3f& eye, const Shading& shading);
+    void draw_cloth(const Eigen::Matrix4f& view_projection, const Eigen::Vector3f& eye,
+                    const Shading& shading);
     /// Replaces the marker list (only when pins change, not per frame). highlight / hover: particle index or
     /// SIZE_MAX.
     void set_markers(std::span<const std::uint32_t> pinned, std::size_t highlight, std::size_t hover);

@@ -50,7 +50,9 @@ struct Mesh {
     }
 };
 
-Eigen::Vector3f vec(const Vec3f& a) { return {a[0], a[1], a[2]}; }
+Eigen::Vector3f vec(const Vec3f& a) {
+    return {a[0], a[1], a[2]};
+}
 
 /// Unit sphere point and normal at (theta from +y, phi around y).
 Eigen::Vector3f sphere_dir(float theta, float phi) {
@@ -72,7 +74,8 @@ void add_ellipsoid(Mesh& m, const Eigen::Vector3f& c, const Eigen::Vector3f& s, 
             point(i + 1, j, p[1], n[1]);
             point(i + 1, j + 1, p[2], n[2]);
             point(i, j + 1, p[3], n[3]);
-            for (int k : {0, 1, 2, 0, 2, 3}) m.add(p[k], n[k]);
+            for (int k : {0, 1, 2, 0, 2, 3})
+                m.add(p[k], n[k]);
         }
 }
 
@@ -100,14 +103,14 @@ void add_capsule(Mesh& m, const Eigen::Vector3f& a, const Eigen::Vector3f& b, fl
     const float len = axis.norm();
     if (len < 1e-6f) return;
     const Eigen::Vector3f w = axis / len;
-    const Eigen::Vector3f u = (std::fabs(w.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY())
-                                  .cross(w)
-                                  .normalized();
+    const Eigen::Vector3f u =
+        (std::fabs(w.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY()).cross(w).normalized();
     const Eigen::Vector3f v = w.cross(u);
     constexpr int segments = 40;
     for (int j = 0; j < segments; ++j) {
         const float a0 = 2.0f * pi * float(j) / segments, a1 = 2.0f * pi * float(j + 1) / segments;
-        const Eigen::Vector3f d0 = std::cos(a0) * u + std::sin(a0) * v, d1 = std::cos(a1) * u + std::sin(a1) * v;
+        const Eigen::Vector3f d0 = std::cos(a0) * u + std::sin(a0) * v,
+                              d1 = std::cos(a1) * u + std::sin(a1) * v;
         m.add(a + radius * d0, d0), m.add(b + radius * d0, d0), m.add(b + radius * d1, d1);
         m.add(a + radius * d0, d0), m.add(b + radius * d1, d1), m.add(a + radius * d1, d1);
     }
@@ -121,12 +124,14 @@ ColliderRenderer::ColliderRenderer(std::span<const Collider> colliders)
     for (const Collider& c : colliders) {
         switch (c.kind) {
         case ColliderKind::sphere:
-            add_ellipsoid(m, vec(c.centre), Eigen::Vector3f::Constant(c.size[0]), Eigen::Matrix3f::Identity());
+            add_ellipsoid(m, vec(c.centre), Eigen::Vector3f::Constant(c.size[0]),
+                          Eigen::Matrix3f::Identity());
             break;
         case ColliderKind::ellipsoid: {
             Eigen::Matrix3f r;
             for (int i = 0; i < 3; ++i)
-                for (int j = 0; j < 3; ++j) r(i, j) = c.rotation[static_cast<std::size_t>(3 * i + j)];
+                for (int j = 0; j < 3; ++j)
+                    r(i, j) = c.rotation[static_cast<std::size_t>(3 * i + j)];
             add_ellipsoid(m, vec(c.centre), vec(c.size), r);
             break;
         }
@@ -142,7 +147,8 @@ ColliderRenderer::ColliderRenderer(std::span<const Collider> colliders)
     }
     vertex_count_ = static_cast<GLsizei>(m.v.size() / 6);
     glCreateBuffers(1, &buffer_);
-    glNamedBufferStorage(buffer_, static_cast<GLsizeiptr>(std::max<std::size_t>(1, m.v.size()) * sizeof(float)),
+    glNamedBufferStorage(buffer_,
+                         static_cast<GLsizeiptr>(std::max<std::size_t>(1, m.v.size()) * sizeof(float)),
                          m.v.empty() ? nullptr : m.v.data(), 0);
     glCreateVertexArrays(1, &vao_);
     for (GLuint a = 0; a < 2; ++a) {

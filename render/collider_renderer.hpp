@@ -1,6 +1,6 @@
-// Draws a scene's analytic colliders (drape/colliders.hpp) as lit solid meshes: spheres, ellipsoids (the body),
-// discs (tables), capsules. Planes are shown by the ground grid (stage.hpp). Meshes are built once per scene and
-// uploaded to a static buffer; colliders do not move.
+// Draws a scene's analytic colliders (drape/colliders.hpp) as lit solid meshes: spheres, ellipsoids (the
+// body), discs (tables), capsules. Planes are shown by the ground grid (stage.hpp). Meshes are built once per
+// scene and uploaded to a static buffer; colliders do not move.
 #pragma once
 
 #include <span>

@@ -10,7 +10,9 @@ namespace drape::render {
 
 namespace {
 std::string last_glfw_error;
-void on_glfw_error(int code, const char* text) { last_glfw_error = std::to_string(code) + ": " + text; }
+void on_glfw_error(int code, const char* text) {
+    last_glfw_error = std::to_string(code) + ": " + text;
+}
 } // namespace
 
 GLFWwindow* open_window(int width, int height, const std::string& title, bool visible) {

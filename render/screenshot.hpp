@@ -5,8 +5,8 @@
 
 namespace drape::render {
 
-/// Reads width x height RGB pixels of the back buffer and writes them to `path` (rows flipped so the PNG is upright).
-/// Throws std::runtime_error naming the path when it cannot be written.
+/// Reads width x height RGB pixels of the back buffer and writes them to `path` (rows flipped so the PNG is
+/// upright). Throws std::runtime_error naming the path when it cannot be written.
 void save_screenshot_png(const std::string& path, int width, int height);
 
 } // namespace drape::render

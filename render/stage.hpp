@@ -1,5 +1,5 @@
-// What the cloth is drawn on: a vertical background gradient and a ground grid (lines every `spacing` m, a brighter
-// line every 5th, fading with distance). Static geometry, uploaded once.
+// What the cloth is drawn on: a vertical background gradient and a ground grid (lines every `spacing` m, a
+// brighter line every 5th, fading with distance). Static geometry, uploaded once.
 #pragma once
 
 #include <Eigen/Core>

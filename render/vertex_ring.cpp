@@ -12,9 +12,8 @@ constexpr std::size_t region_alignment_floats = 256 / sizeof(float);
 } // namespace
 
 VertexRing::VertexRing(std::size_t region_floats)
-    : region_floats_(region_floats),
-      stride_floats_((region_floats + region_alignment_floats - 1) / region_alignment_floats *
-                     region_alignment_floats) {
+    : region_floats_(region_floats), stride_floats_((region_floats + region_alignment_floats - 1) /
+                                                    region_alignment_floats * region_alignment_floats) {
     if (stride_floats_ == 0) stride_floats_ = region_alignment_floats;
     glCreateBuffers(1, &buffer_);
     glGetError();
@@ -61,7 +60,8 @@ std::span<float> VertexRing::acquire(std::size_t region, double* out_wait_ms) {
         f = nullptr;
     }
     if (out_wait_ms)
-        *out_wait_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+        *out_wait_ms =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return {mapped_ + region * stride_floats_, region_floats_};
 }
 

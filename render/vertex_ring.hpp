@@ -1,10 +1,10 @@
 // The zero-copy vertex path (DESIGN.md "Drawing"): one OpenGL buffer, allocated once with glBufferStorage and
 // mapped once, persistently and coherently (GL_MAP_WRITE_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT).
-// It holds region_count regions used in turn: while the GPU still reads region n-1 (or n-2), core's output stage
-// writes frame n straight into region n through the mapped pointer. Each region is guarded by a fence placed after
-// the last draw call that reads it; acquire() waits on that fence before handing the region out again, so the CPU
-// never overwrites vertex data the GPU has not consumed. Nothing is copied per frame: no glBufferSubData, no staging
-// array, no unmap/remap.
+// It holds region_count regions used in turn: while the GPU still reads region n-1 (or n-2), core's output
+// stage writes frame n straight into region n through the mapped pointer. Each region is guarded by a fence
+// placed after the last draw call that reads it; acquire() waits on that fence before handing the region out
+// again, so the CPU never overwrites vertex data the GPU has not consumed. Nothing is copied per frame: no
+// glBufferSubData, no staging array, no unmap/remap.
 //
 //   frame:    n            n+1          n+2          n+3
 //   region:   0            1            2            0  <- acquire(0) waits for frame n's fence
@@ -22,8 +22,8 @@ class VertexRing {
   public:
     static constexpr std::size_t region_count = 3;
 
-    /// Allocates and maps region_count regions of `region_floats` floats each (region starts 256-byte aligned).
-    /// Throws std::runtime_error when the driver refuses the storage or the mapping.
+    /// Allocates and maps region_count regions of `region_floats` floats each (region starts 256-byte
+    /// aligned). Throws std::runtime_error when the driver refuses the storage or the mapping.
     explicit VertexRing(std::size_t region_floats);
     ~VertexRing();
     VertexRing(const VertexRing&) = delete;

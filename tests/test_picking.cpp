@@ -1,6 +1,6 @@
-// Ray-sphere picking (core/src/picking.cpp) without a window: the nearest particle along the ray is hit, misses miss,
-// particles behind the camera are never picked, rays unprojected from a real view-projection pass through what the
-// camera sees at that pixel, and the drag target keeps the picked depth.
+// Ray-sphere picking (core/src/picking.cpp) without a window: the nearest particle along the ray is hit,
+// misses miss, particles behind the camera are never picked, rays unprojected from a real view-projection
+// pass through what the camera sees at that pixel, and the drag target keeps the picked depth.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -26,10 +26,13 @@ struct Points {
     }
 };
 
-Ray ray(Eigen::Vector3f o, Eigen::Vector3f d) { return {o, d.normalized()}; }
+Ray ray(Eigen::Vector3f o, Eigen::Vector3f d) {
+    return {o, d.normalized()};
+}
 
 // OpenGL-style look-at and perspective (the same formulas the viewer's camera uses).
-Eigen::Matrix4f look_at(const Eigen::Vector3f& eye, const Eigen::Vector3f& target, const Eigen::Vector3f& up) {
+Eigen::Matrix4f look_at(const Eigen::Vector3f& eye, const Eigen::Vector3f& target,
+                        const Eigen::Vector3f& up) {
     const Eigen::Vector3f f = (target - eye).normalized(), s = f.cross(up).normalized(), u = s.cross(f);
     Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
     m.row(0).head<3>() = s;
@@ -80,8 +83,8 @@ TEST(Picking, GrazingHitIsFoundAndOffRayIsMissed) {
 
 TEST(Picking, ParticlesBehindTheCameraAreNeverPicked) {
     Points p;
-    p.add(0.0f, 0.0f, 2.0f);  // behind (the ray looks down -z)
-    p.add(0.0f, 0.0f, 0.5f);  // behind, close
+    p.add(0.0f, 0.0f, 2.0f); // behind (the ray looks down -z)
+    p.add(0.0f, 0.0f, 0.5f); // behind, close
     EXPECT_FALSE(pick_particle(ray({0, 0, 0}, {0, 0, -1}), p.x, p.y, p.z, 0.1f).hit());
     p.add(0.0f, 0.0f, -4.0f); // in front
     const PickHit h = pick_particle(ray({0, 0, 0}, {0, 0, -1}), p.x, p.y, p.z, 0.1f);
@@ -100,7 +103,8 @@ TEST(Picking, TiesGoToTheLowerIndexAndResultIsThreadIndependent) {
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);
     Points p;
-    for (int i = 0; i < 100000; ++i) p.add(u(rng), u(rng), -3.0f + u(rng));
+    for (int i = 0; i < 100000; ++i)
+        p.add(u(rng), u(rng), -3.0f + u(rng));
     p.x[70000] = p.x[90000] = 0.001f;
     p.y[70000] = p.y[90000] = 0.0f;
     p.z[70000] = p.z[90000] = -1.5f;
@@ -162,7 +166,8 @@ TEST(Picking, UnprojectedRayPassesThroughWhatThePixelShows) {
     EXPECT_EQ(tl.x(), -1.0f);
     EXPECT_EQ(tl.y(), 1.0f);
 
-    // A particle projected to a pixel is picked by the ray through that pixel, and the particle next to it is not.
+    // A particle projected to a pixel is picked by the ray through that pixel, and the particle next to it is
+    // not.
     Points p;
     p.add(0.3f, -0.7f, 0.2f);
     p.add(0.3f, -0.7f, 0.5f);

@@ -1,8 +1,8 @@
-// The output stage (core/src/publish.cpp) against a plain scalar reference: positions copied exactly, area-weighted
-// normals per vertex from the triangle list (double precision, scatter form), the structural strain figure equal to
-// Simulation::health()'s, padding zeroed, and the parallel result bitwise equal to the serial twin at 1, 2 and 3
-// threads. Both paths are covered: the SIMD grid path (scene "hang") and the general per-vertex fan path (the same
-// cloth without its grid stencil, and a small irregular mesh).
+// The output stage (core/src/publish.cpp) against a plain scalar reference: positions copied exactly,
+// area-weighted normals per vertex from the triangle list (double precision, scatter form), the structural
+// strain figure equal to Simulation::health()'s, padding zeroed, and the parallel result bitwise equal to the
+// serial twin at 1, 2 and 3 threads. Both paths are covered: the SIMD grid path (scene "hang") and the
+// general per-vertex fan path (the same cloth without its grid stencil, and a small irregular mesh).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -27,7 +27,8 @@ struct Reference {
     double max_strain = 0.0;
 };
 
-/// Scatter form, the textbook way: each triangle adds (b - a) x (c - a) to its three vertices; then normalise.
+/// Scatter form, the textbook way: each triangle adds (b - a) x (c - a) to its three vertices; then
+/// normalise.
 Reference reference_normals(const Cloth& cloth, const std::vector<float>& x, const std::vector<float>& y,
                             const std::vector<float>& z) {
     const std::size_t n = cloth.particle_count;
@@ -62,12 +63,14 @@ Reference reference_normals(const Cloth& cloth, const std::vector<float>& x, con
     for (const Edge& e : cloth.edges) {
         if (e.kind != SpringKind::structural) continue;
         const double dx = double(x[e.b]) - x[e.a], dy = double(y[e.b]) - y[e.a], dz = double(z[e.b]) - z[e.a];
-        r.max_strain = std::max(r.max_strain, std::fabs(std::sqrt(dx * dx + dy * dy + dz * dz) - e.rest) / e.rest);
+        r.max_strain =
+            std::max(r.max_strain, std::fabs(std::sqrt(dx * dx + dy * dy + dz * dz) - e.rest) / e.rest);
     }
     return r;
 }
 
-/// Checks a publish() output against the reference; returns the largest normal error (radians-ish: |n - n_ref|).
+/// Checks a publish() output against the reference; returns the largest normal error (radians-ish: |n -
+/// n_ref|).
 double check_output(const Publisher& pub, const Cloth& cloth, const std::vector<float>& out,
                     const std::vector<float>& x, const std::vector<float>& y, const std::vector<float>& z,
                     const PublishStats& stats) {
@@ -88,7 +91,8 @@ double check_output(const Publisher& pub, const Cloth& cloth, const std::vector<
         EXPECT_LT(err, 2e-5) << "normal of vertex " << i;
     }
     for (std::size_t i = n; i < plane; ++i)
-        for (std::size_t q = 0; q < vertex_plane_count; ++q) EXPECT_EQ(out[q * plane + i], 0.0f) << "padding " << i;
+        for (std::size_t q = 0; q < vertex_plane_count; ++q)
+            EXPECT_EQ(out[q * plane + i], 0.0f) << "padding " << i;
     EXPECT_TRUE(stats.finite);
     EXPECT_NEAR(stats.max_structural_strain, ref.max_strain, 1e-5 * std::max(1.0, ref.max_strain));
     return worst;
@@ -122,8 +126,8 @@ TEST_P(PublishGrid, MatchesScalarReferenceOnPerturbedCloth) {
                 double(stats.max_structural_strain));
 }
 
-// 2: every vertex on the border; 5 and 33: partial SIMD batches and rows shorter/longer than a batch; 40: 1600
-// particles over two blocks with the SIMD body in use; 77: odd size, several blocks.
+// 2: every vertex on the border; 5 and 33: partial SIMD batches and rows shorter/longer than a batch; 40:
+// 1600 particles over two blocks with the SIMD body in use; 77: odd size, several blocks.
 INSTANTIATE_TEST_SUITE_P(Sizes, PublishGrid, ::testing::Values(2u, 3u, 5u, 17u, 33u, 40u, 77u));
 
 TEST(Publish, GeneralPathMatchesReferenceAndGridPath) {
@@ -141,7 +145,8 @@ TEST(Publish, GeneralPathMatchesReferenceAndGridPath) {
     check_output(grid_pub, grid_cloth, a, s.x, s.y, s.z, sa);
     check_output(general_pub, general_cloth, b, s.x, s.y, s.z, sb);
     EXPECT_EQ(sa.max_structural_strain, sb.max_structural_strain);
-    for (std::size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 2e-5f) << i;
+    for (std::size_t i = 0; i < a.size(); ++i)
+        EXPECT_NEAR(a[i], b[i], 2e-5f) << i;
 }
 
 // A small irregular mesh: a fan of 5 triangles around vertex 0, bent out of plane, plus a detached triangle.

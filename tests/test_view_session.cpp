@@ -1,6 +1,6 @@
-// The viewer's model (app/view_session.cpp) without a window: changes the panels make are applied, unstable ones are
-// compensated with more substeps or refused with a message (never an unstable step), rebuilds keep the motion and the
-// pins, every pin can be unpinned, grabs pin and release.
+// The viewer's model (app/view_session.cpp) without a window: changes the panels make are applied, unstable
+// ones are compensated with more substeps or refused with a message (never an unstable step), rebuilds keep
+// the motion and the pins, every pin can be unpinned, grabs pin and release.
 #include <gtest/gtest.h>
 
 #include <cmath>

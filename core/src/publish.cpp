@@ -1,5 +1,5 @@
-// Output stage: positions and area-weighted normals into the caller's span (see publish.hpp for the layout and
-// the two paths).
+// Output stage: positions and area-weighted normals into the caller's span (see publish.hpp for the layout
+// and the two paths).
 #include "drape/publish.hpp"
 
 #include <algorithm>
@@ -24,9 +24,9 @@ constexpr std::size_t W = simd::width;
 /// Structural springs per strain chunk on the general path (fixed, so partials combine in a fixed order).
 constexpr std::size_t strain_chunk_springs = 8192;
 
-// Grid fan, counter-clockwise seen from +normal around vertex (i, j), with "hang"'s triangulation (cells split by
-// the (i+1, j)-(i, j+1) diagonal): neighbours E (i+1, j), NE (i+1, j-1), N (i, j-1), W (i-1, j), SW (i-1, j+1),
-// S (i, j+1). Fan triangle t is (vertex, fan[t], fan[t+1 mod 6]).
+// Grid fan, counter-clockwise seen from +normal around vertex (i, j), with "hang"'s triangulation (cells
+// split by the (i+1, j)-(i, j+1) diagonal): neighbours E (i+1, j), NE (i+1, j-1), N (i, j-1), W (i-1, j), SW
+// (i-1, j+1), S (i, j+1). Fan triangle t is (vertex, fan[t], fan[t+1 mod 6]).
 enum Fan : int { east, north_east, north, west, south_west, south, fan_count };
 constexpr std::uint32_t spring_east_bit = 1u << 6;
 constexpr std::uint32_t spring_south_bit = 1u << 7;
@@ -50,7 +50,8 @@ std::uint32_t grid_vertex_mask(std::size_t i, std::size_t j, std::size_t columns
 }
 
 /// True when `triangles` is exactly the triangulation scene "hang" builds for a columns x rows grid.
-bool is_hang_triangulation(const std::vector<std::uint32_t>& triangles, std::size_t columns, std::size_t rows) {
+bool is_hang_triangulation(const std::vector<std::uint32_t>& triangles, std::size_t columns,
+                           std::size_t rows) {
     if (columns < 2 || rows < 2 || triangles.size() != 6 * (columns - 1) * (rows - 1)) return false;
     std::size_t t = 0;
     for (std::size_t j = 0; j + 1 < rows; ++j)
@@ -107,7 +108,8 @@ Publisher::Publisher(const Cloth& cloth)
     const std::size_t n = particle_count_;
     for (std::uint32_t v : cloth.triangles)
         if (v >= n)
-            throw InvalidInput("triangle vertex " + std::to_string(v) + " is outside [0, " + std::to_string(n) + ")");
+            throw InvalidInput("triangle vertex " + std::to_string(v) + " is outside [0, " +
+                               std::to_string(n) + ")");
     if (cloth.triangles.size() % 3 != 0)
         throw InvalidInput("triangle list length " + std::to_string(cloth.triangles.size()) +
                            " is not a multiple of 3");
@@ -138,12 +140,15 @@ Publisher::Publisher(const Cloth& cloth)
                 uniform = false;
             }
         }
-        grid_strain_ = uniform && east == grid_rows_ * (grid_columns_ - 1) && south == grid_columns_ * (grid_rows_ - 1);
+        grid_strain_ =
+            uniform && east == grid_rows_ * (grid_columns_ - 1) && south == grid_columns_ * (grid_rows_ - 1);
     } else {
         // General path: per vertex, the (next, previous) pairs of its triangles, in triangle order.
         fan_offsets_.assign(n + 1, 0);
-        for (std::uint32_t v : cloth.triangles) ++fan_offsets_[v + 1];
-        for (std::size_t i = 0; i < n; ++i) fan_offsets_[i + 1] += fan_offsets_[i];
+        for (std::uint32_t v : cloth.triangles)
+            ++fan_offsets_[v + 1];
+        for (std::size_t i = 0; i < n; ++i)
+            fan_offsets_[i + 1] += fan_offsets_[i];
         fan_pairs_.resize(2 * std::size_t{fan_offsets_[n]});
         std::vector<std::uint32_t> fill(fan_offsets_.begin(), fan_offsets_.end() - 1);
         const auto& t = cloth.triangles;
@@ -171,16 +176,17 @@ PublishStats Publisher::publish(std::span<const float> x, std::span<const float>
     return publish_impl<true>(x, y, z, out);
 }
 
-PublishStats Publisher::publish_serial(std::span<const float> x, std::span<const float> y, std::span<const float> z,
-                                       std::span<float> out) {
+PublishStats Publisher::publish_serial(std::span<const float> x, std::span<const float> y,
+                                       std::span<const float> z, std::span<float> out) {
     return publish_impl<false>(x, y, z, out);
 }
 
 template <bool Parallel>
-PublishStats Publisher::publish_impl(std::span<const float> x, std::span<const float> y, std::span<const float> z,
-                                     std::span<float> out) {
+PublishStats Publisher::publish_impl(std::span<const float> x, std::span<const float> y,
+                                     std::span<const float> z, std::span<float> out) {
     if (x.size() < particle_count_ || y.size() < particle_count_ || z.size() < particle_count_)
-        throw InvalidInput("publish: position spans hold fewer than " + std::to_string(particle_count_) + " values");
+        throw InvalidInput("publish: position spans hold fewer than " + std::to_string(particle_count_) +
+                           " values");
     if (out.size() < output_floats())
         throw InvalidInput("publish: output span holds " + std::to_string(out.size()) + " floats, needs " +
                            std::to_string(output_floats()));
@@ -195,20 +201,25 @@ PublishStats Publisher::publish_impl(std::span<const float> x, std::span<const f
     if constexpr (Parallel) {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, block_count_, 1),
                           [&](const tbb::blocked_range<std::size_t>& r) {
-                              for (std::size_t b = r.begin(); b != r.end(); ++b) run_block(b);
+                              for (std::size_t b = r.begin(); b != r.end(); ++b)
+                                  run_block(b);
                           });
         if (strain_chunk_count_ > 0)
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, strain_chunk_count_, 1),
                               [&](const tbb::blocked_range<std::size_t>& r) {
-                                  for (std::size_t c = r.begin(); c != r.end(); ++c) strain_chunk(c, p);
+                                  for (std::size_t c = r.begin(); c != r.end(); ++c)
+                                      strain_chunk(c, p);
                               });
     } else {
-        for (std::size_t b = 0; b < block_count_; ++b) run_block(b);
-        for (std::size_t c = 0; c < strain_chunk_count_; ++c) strain_chunk(c, p);
+        for (std::size_t b = 0; b < block_count_; ++b)
+            run_block(b);
+        for (std::size_t c = 0; c < strain_chunk_count_; ++c)
+            strain_chunk(c, p);
     }
     // The padding after the last block (only when there are no particles at all).
     for (std::size_t k = block_count_ * block_particles; k < plane_floats_; ++k)
-        for (std::size_t plane = 0; plane < vertex_plane_count; ++plane) o[plane * plane_floats_ + k] = 0.0f;
+        for (std::size_t plane = 0; plane < vertex_plane_count; ++plane)
+            o[plane * plane_floats_ + k] = 0.0f;
 
     PublishStats stats;
     float strain = 0.0f;
@@ -216,18 +227,20 @@ PublishStats Publisher::publish_impl(std::span<const float> x, std::span<const f
         stats.finite = stats.finite && block_finite_[b] != 0;
         strain = std::max(strain, block_strain_[b]);
     }
-    for (std::size_t c = 0; c < strain_chunk_count_; ++c) strain = std::max(strain, chunk_strain_[c]);
+    for (std::size_t c = 0; c < strain_chunk_count_; ++c)
+        strain = std::max(strain, chunk_strain_[c]);
     stats.max_structural_strain = stats.finite ? strain : NAN;
     return stats;
 }
 
-// One vertex of the grid path, scalar: the rows at the top and bottom of the cloth (whose fan would read outside
-// the arrays) and the padding. Same arithmetic, in the same order, as the SIMD body in block_grid.
+// One vertex of the grid path, scalar: the rows at the top and bottom of the cloth (whose fan would read
+// outside the arrays) and the padding. Same arithmetic, in the same order, as the SIMD body in block_grid.
 void Publisher::grid_vertex_scalar(std::size_t k, Positions p, float* out, float& strain,
                                    bool& finite) const noexcept {
     const std::size_t plane = plane_floats_;
     if (k >= particle_count_) {
-        for (std::size_t q = 0; q < vertex_plane_count; ++q) out[q * plane + k] = 0.0f;
+        for (std::size_t q = 0; q < vertex_plane_count; ++q)
+            out[q * plane + k] = 0.0f;
         return;
     }
     const std::uint32_t mask = grid_mask_[k];
@@ -255,7 +268,8 @@ void Publisher::grid_vertex_scalar(std::size_t k, Positions p, float* out, float
         nz = nz + (on ? cz : 0.0f);
     }
     normalize_or_up(nx, ny, nz);
-    if (mask & spring_east_bit) strain = std::max(strain, spring_strain(ex[east], ey[east], ez[east], rest_east_));
+    if (mask & spring_east_bit)
+        strain = std::max(strain, spring_strain(ex[east], ey[east], ez[east], rest_east_));
     if (mask & spring_south_bit)
         strain = std::max(strain, spring_strain(ex[south], ey[south], ez[south], rest_south_));
     finite = finite && finite3(px, py, pz) && finite3(nx, ny, nz);
@@ -280,9 +294,11 @@ void Publisher::block_grid(std::size_t block, Positions p, float* out) noexcept 
     fmask finite_v(true);
     const fbatch zero(0.0f), one(1.0f), rest_e(rest_east_), rest_s(rest_south_);
     for (std::size_t k = begin; k < end; k += W) {
-        // SIMD when the whole fan of all W lanes is inside the arrays: k - columns >= 0, k + W - 1 + columns < n.
+        // SIMD when the whole fan of all W lanes is inside the arrays: k - columns >= 0, k + W - 1 + columns
+        // < n.
         if (k < columns || k + W + columns > particle_count_) {
-            for (std::size_t l = k; l < k + W; ++l) grid_vertex_scalar(l, p, out, strain, finite);
+            for (std::size_t l = k; l < k + W; ++l)
+                grid_vertex_scalar(l, p, out, strain, finite);
             continue;
         }
         const fbatch px = simd::loadu(p.x + k), py = simd::loadu(p.y + k), pz = simd::loadu(p.z + k);
@@ -328,7 +344,8 @@ void Publisher::block_grid(std::size_t block, Positions p, float* out) noexcept 
     }
     alignas(64) float lanes[W];
     strain_v.store_aligned(lanes);
-    for (float s : lanes) strain = std::max(strain, s);
+    for (float s : lanes)
+        strain = std::max(strain, s);
     block_strain_[block] = strain_here ? strain : 0.0f;
     block_finite_[block] = (finite && xsimd::all(finite_v)) ? 1 : 0;
 }
@@ -360,7 +377,8 @@ void Publisher::block_general(std::size_t block, Positions p, float* out) noexce
         out[5 * plane + k] = nz;
     }
     for (std::size_t k = real_end; k < end; ++k)
-        for (std::size_t q = 0; q < vertex_plane_count; ++q) out[q * plane + k] = 0.0f;
+        for (std::size_t q = 0; q < vertex_plane_count; ++q)
+            out[q * plane + k] = 0.0f;
     block_strain_[block] = 0.0f;
     block_finite_[block] = finite ? 1 : 0;
 }
