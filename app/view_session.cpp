@@ -275,7 +275,10 @@ void ViewSession::rebuild(bool keep_state) {
     auto publisher = std::make_unique<Publisher>(sim->cloth());
     publisher_ = std::move(publisher);
     sim_ = std::move(sim);
-    if (auto_substeps_) substeps_ = auto_substep_count(params_.dt);
+    if (auto_substeps_)
+        substeps_ = auto_substep_count(params_.dt);
+    else if (!keep_frame_time_)
+        frame_time_ = double(substeps_) * double(params_.dt);
     ++generation_;
     refresh_pins();
 }
@@ -323,8 +326,8 @@ void ViewSession::reset() {
 }
 
 ViewSession::Snapshot ViewSession::snapshot() const {
-    return {size_,     spec_,   total_mass_, fabric_,  has_seams_, cloth_size_, frame_lo_,
-            frame_hi_, ground_, params_,     auto_dt_, dt_bound_,  substeps_,   spacing_};
+    return {size_,   spec_,   total_mass_, fabric_,   has_seams_, cloth_size_, frame_lo_,  frame_hi_,
+            ground_, params_, auto_dt_,    dt_bound_, substeps_,  spacing_,    frame_time_};
 }
 
 void ViewSession::restore(const Snapshot& b) {
@@ -341,6 +344,8 @@ void ViewSession::restore(const Snapshot& b) {
     auto_dt_ = b.auto_dt;
     dt_bound_ = b.dt_bound;
     substeps_ = b.substeps;
+    frame_time_ = b.frame_time;
+    keep_frame_time_ = false;
     spacing_ = b.spacing;
 }
 
@@ -414,9 +419,11 @@ bool ViewSession::apply_physics(const Candidate& next, const std::string& what) 
     int new_substeps = substeps_;
     if (auto_substeps_) {
         new_substeps = auto_substep_count(new_dt);
-    } else if (new_dt < old_dt) {
-        // Keep the simulated time per frame: substeps x dt.
-        new_substeps = static_cast<int>(std::ceil(double(substeps_) * old_dt / new_dt - 1e-6));
+    } else {
+        // Keep the simulated time per frame the user chose (substeps x dt when they last set either), in both
+        // directions, so the result does not depend on the path (typing 20000 passes through 2, 20, 200,
+        // ...).
+        new_substeps = manual_substep_count(new_dt);
         if (new_substeps > view_max_substeps) {
             post(MessageLevel::warning, "refused: " + what + " needs dt <= " + fmt(bound) + " s, i.e. " +
                                             std::to_string(new_substeps) +
@@ -473,6 +480,9 @@ bool ViewSession::apply_physics(const Candidate& next, const std::string& what) 
         post(MessageLevel::warning, note);
     } else {
         if (new_dt != old_dt) note += "; dt " + fmt(new_dt) + " s (bound " + fmt(bound) + " s)";
+        if (new_substeps != old_substeps)
+            note += ", substeps per frame " + std::to_string(old_substeps) + " -> " +
+                    std::to_string(new_substeps);
         post(MessageLevel::info, note);
     }
     return true;
@@ -505,8 +515,8 @@ void ViewSession::set_node_mass(float grams) {
     const double old_dt = sim_->params().dt;
     double new_dt = (auto_dt_ || old_dt > bound) ? 0.9 * bound : old_dt;
     int new_substeps = substeps_;
-    if (!auto_substeps_ && new_dt < old_dt) {
-        new_substeps = static_cast<int>(std::ceil(double(substeps_) * old_dt / new_dt - 1e-6));
+    if (!auto_substeps_) {
+        new_substeps = manual_substep_count(new_dt);
         if (new_substeps > view_max_substeps) {
             post(MessageLevel::warning, "refused: node mass " + fmt(grams) + " g needs dt <= " + fmt(bound) +
                                             " s, i.e. " + std::to_string(new_substeps) +
@@ -522,7 +532,9 @@ void ViewSession::set_node_mass(float grams) {
             params_ = sim_->params();
             params_.dt = static_cast<float>(new_dt);
             if (!auto_substeps_) substeps_ = new_substeps;
+            keep_frame_time_ = true; // the node mass keeps the pace, like the other physics changes
             rebuild(!was_error);
+            keep_frame_time_ = false;
         }))
         return;
     const double ms =
@@ -587,7 +599,10 @@ void ViewSession::set_dt(double dt) {
     }
     params_ = p;
     auto_dt_ = false;
-    if (auto_substeps_) substeps_ = auto_substep_count(dt);
+    if (auto_substeps_)
+        substeps_ = auto_substep_count(dt);
+    else
+        frame_time_ = double(substeps_) * double(p.dt);
 }
 
 void ViewSession::set_auto_dt(bool on) {
@@ -601,11 +616,20 @@ void ViewSession::set_auto_dt(bool on) {
 void ViewSession::set_substeps(int s) {
     substeps_ = std::clamp(s, 1, view_max_substeps);
     auto_substeps_ = false;
+    frame_time_ = double(substeps_) * double(sim_->params().dt);
 }
 
 void ViewSession::set_auto_substeps(bool on) {
     auto_substeps_ = on;
-    if (on) substeps_ = auto_substep_count(sim_->params().dt);
+    if (on)
+        substeps_ = auto_substep_count(sim_->params().dt);
+    else
+        frame_time_ = double(substeps_) * double(sim_->params().dt);
+}
+
+int ViewSession::manual_substep_count(double dt) const {
+    const double want = std::ceil(frame_time_ / dt - 1e-6);
+    return want > 1e6 ? 1000000 : std::max(1, static_cast<int>(want));
 }
 
 void ViewSession::set_threads(int t) {

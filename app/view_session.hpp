@@ -166,6 +166,9 @@ class ViewSession {
     std::array<SpringMaterial, spring_kind_count> materials(const FabricSettings& f) const;
     double bound_for(const FabricSettings& f, float air_drag) const;
     int auto_substep_count(double dt) const;
+    /// Manual substeps: enough substeps of dt to cover frame_time_ (may exceed view_max_substeps: callers
+    /// refuse).
+    int manual_substep_count(double dt) const;
     /// Applies a change of fabric or drag with the stability rules above; returns false if refused.
     bool apply_physics(const Candidate& next, const std::string& what);
     void rebuild(bool keep_state);
@@ -183,6 +186,7 @@ class ViewSession {
         double dt_bound;
         int substeps;
         float spacing;
+        double frame_time;
     };
     Snapshot snapshot() const;
     void restore(const Snapshot& before);
@@ -208,6 +212,8 @@ class ViewSession {
     int threads_ = 1;
     int substeps_ = 10;
     bool auto_substeps_ = true;
+    double frame_time_ = 0.0;      ///< s simulated per frame the user chose (manual substeps)
+    bool keep_frame_time_ = false; ///< rebuild keeps frame_time_ (physics changes) instead of re-anchoring it
     bool auto_dt_ = true;
     double dt_bound_ = 0.0;
     float spacing_ = 0.0f;

@@ -155,3 +155,22 @@ TEST(ViewSession, SceneFilesAndBuiltInScenes) {
     EXPECT_THROW(ViewSession("tshirt", 5u, 1, std::nullopt), InvalidInput);
     EXPECT_THROW(ViewSession("nowhere", std::nullopt, 1, std::nullopt), InvalidInput);
 }
+
+TEST(ViewSession, ManualSubstepsFollowThePaceWhateverThePath) {
+    // Typing 16000 into the slider applies 1, 16, 160 (clamped to 100), 1600 and 16000 in turn: the end state
+    // must be that of setting 16000 at once.
+    ViewSession direct(16, 1, 10), typed(16, 1, 10);
+    direct.set_stiffness(SpringKind::structural, 16000.0f);
+    for (float k : {1.0f, 16.0f, 160.0f, 1600.0f, 16000.0f})
+        typed.set_stiffness(SpringKind::structural, k);
+    EXPECT_EQ(typed.substeps(), direct.substeps());
+    EXPECT_EQ(typed.params().dt, direct.params().dt);
+    // Softer springs: dt grows, fewer substeps for the same simulated time per frame (at least 1).
+    ViewSession soft(16, 1, 10);
+    const double pace = double(soft.substeps()) * soft.params().dt;
+    soft.set_stiffness(SpringKind::structural, 100.0f);
+    EXPECT_LT(soft.substeps(), 10);
+    EXPECT_GE(soft.substeps(), 1);
+    EXPECT_NEAR(double(soft.substeps()) * soft.params().dt, pace, soft.params().dt * 1.01);
+    EXPECT_TRUE(stable(soft));
+}
