@@ -83,6 +83,37 @@ void BM_Stage(benchmark::State& state) {
     state.SetLabel(stage_name(stage));
 }
 
+/// One strain-limiting pass (levelled colour groups, 10 % limit) over a soft "hang" that has been stretched: the cost
+/// per limited spring. Args: N, threads.
+void BM_StrainLimit(benchmark::State& state) {
+    const auto n = static_cast<std::uint32_t>(state.range(0));
+    const auto threads = static_cast<std::size_t>(state.range(1));
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    static std::map<std::uint32_t, std::unique_ptr<Simulation>> cache;
+    auto& slot = cache[n];
+    if (!slot) {
+        HangParams hp;
+        hp.n = n;
+        hp.stiffness = 100.0f;
+        SceneBuild scene = build_hang_scene(hp);
+        SimulationParams sp;
+        sp.dt = static_cast<float>(default_dt(scene.cloth, sp.air_drag));
+        sp.strain_limit = {0.1f, 1, 1};
+        slot = std::make_unique<Simulation>(std::move(scene.cloth), scene.initial, sp);
+        slot->step(2000); // hanging and stretched
+    }
+    Simulation& sim = *slot;
+    for (auto _ : state) sim.run_stage(Stage::strain_limit);
+    const double springs = double(sim.strain_limit_groups().edge_index.size());
+    state.counters["springs_per_second"] =
+        benchmark::Counter(springs * double(state.iterations()), benchmark::Counter::kIsRate);
+    state.counters["particle_substeps_per_second"] =
+        benchmark::Counter(double(sim.cloth().particle_count) * double(state.iterations()), benchmark::Counter::kIsRate);
+    state.counters["groups"] = double(sim.strain_limit_groups().group_count());
+    state.counters["threads"] = double(threads);
+    state.SetLabel("strain_limit pass");
+}
+
 void thread_args(benchmark::internal::Benchmark* b, std::initializer_list<std::int64_t> sizes) {
     const int hardware = tbb::info::default_concurrency();
     for (std::int64_t n : sizes) {
@@ -111,13 +142,20 @@ BENCHMARK(BM_SubstepStaged)
     ->UseRealTime()
     ->MinTime(1.0)
     ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_StrainLimit)
+    ->ArgNames({"N", "threads"})
+    ->Apply([](auto* b) { thread_args(b, {100, 316}); })
+    ->UseRealTime()
+    ->MinTime(0.5)
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Stage)
     ->ArgNames({"stage", "N", "threads"})
     ->Apply([](auto* b) {
+        // The stages "hang" runs (the others are measured on scenes that use them: BM_StrainLimit, bench/garments.py).
         const int hardware = tbb::info::default_concurrency();
-        for (int s = 0; s < static_cast<int>(Stage::count); ++s)
+        for (Stage s : {Stage::external_forces, Stage::spring_forces, Stage::integrate})
             for (std::int64_t n : {316, 1000})
-                for (int t : {1, hardware}) b->Args({s, n, t});
+                for (int t : {1, hardware}) b->Args({static_cast<int>(s), n, t});
     })
     ->UseRealTime()
     ->MinTime(0.5)
