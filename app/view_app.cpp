@@ -151,10 +151,11 @@ void Viewer::reset_camera() {
     camera_.fov_y_deg = 40.0f;
     const SimulationParams& p = session_->sim().params();
     if (p.aero.enabled && std::hypot(p.aero.velocity[0], p.aero.velocity[2]) > 0.0f) {
-        // A flag flies downwind: look at it from the side of the wind and from above, to see its surface.
+        // A flag flies downwind from its pole, in the vertical plane along the wind: look at that plane from
+        // the side, a little from downwind and above.
         const float wind_yaw = std::atan2(p.aero.velocity[0], p.aero.velocity[2]);
-        camera_.yaw = wind_yaw + 1.0f;
-        camera_.pitch = 0.6f;
+        camera_.yaw = wind_yaw + 1.3f;
+        camera_.pitch = 0.2f;
     }
     int w = 1, h = 1;
     glfwGetWindowSize(window_, &w, &h);
@@ -193,12 +194,13 @@ void Viewer::sync_gpu() {
         stage_ = std::make_unique<render::Stage>(ground, 0.5f * (lo[0] + hi[0]), 0.5f * (lo[2] + hi[2]),
                                                  2.5f * extent, spacing);
         colliders_ = std::make_unique<render::ColliderRenderer>(session_->sim().params().colliders);
-        // The point light: in front, to the right and above the scene, at about its size.
-        shading_.light_position = {0.5f * (lo[0] + hi[0]) + 0.9f * extent,
-                                   0.5f * (lo[1] + hi[1]) + 1.0f * extent,
-                                   0.5f * (lo[2] + hi[2]) + 1.2f * extent};
         gpu_scene_ = session_->scene_generation();
         reset_camera();
+        // The point light: on the side the default view looks from and above, at about the scene's size (for
+        // hang: in front, to the right and above).
+        shading_.light_position = {0.5f * (lo[0] + hi[0]) + 1.5f * extent * std::sin(camera_.yaw),
+                                   0.5f * (lo[1] + hi[1]) + 1.0f * extent,
+                                   0.5f * (lo[2] + hi[2]) + 1.5f * extent * std::cos(camera_.yaw)};
     }
     const std::size_t grabbed = session_->sim().grabbed();
     // Automated runs (--frames) show no hover marker: Xvfb's pointer sits wherever it is.
