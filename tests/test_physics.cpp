@@ -108,6 +108,11 @@ TEST(Physics, UserPinHoldsAndUnpinReleases) {
     sim.step(500);
     EXPECT_LT(sim.y()[i], y - 1e-3f);
     EXPECT_THROW(sim.set_pinned(16 * 16, true), InvalidInput);
+    // An authored pin (corner (0,0)) can be released too: it then falls with the cloth.
+    sim.set_pinned(0, false);
+    EXPECT_FALSE(sim.is_pinned(0));
+    sim.step(300);
+    EXPECT_LT(sim.y()[0], -1e-3f);
 }
 
 TEST(Physics, GrabbedParticleFollowsTheTarget) {

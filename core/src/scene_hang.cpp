@@ -115,6 +115,7 @@ SceneBuild build_hang_scene(const HangParams& p) {
     const std::size_t halo = 2 * std::size_t{n} + 2 + simd::width;
     out.cloth = cook_cloth(inv_mass, std::move(edges), material, halo);
     out.cloth.grid = std::move(g);
+    out.cloth.free_inv_mass.assign(count, 1.0f / mass);
     // Triangles: two per grid cell, counter-clockwise seen from +y (horizontal) or +z (vertical).
     auto& tri = out.cloth.triangles;
     tri.reserve(static_cast<std::size_t>(6) * (n - 1) * (n - 1));

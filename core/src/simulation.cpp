@@ -101,6 +101,7 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
     block_ok_.assign(cloth_.block_count(), 1);
     for (AlignedArray<float>* a : {&extra_fx_, &extra_fy_, &extra_fz_}) a->reset(padded);
     inv_mass_authored_.assign(cloth_.inv_mass.begin(), cloth_.inv_mass.end());
+    inv_mass_free_ = cloth_.free_inv_mass.size() == n ? cloth_.free_inv_mass : inv_mass_authored_;
     if (params_.strain_limit.ratio > 0.0f) cook_strain_limit();
     if (params_.aero.enabled) cook_aero();
 
@@ -179,8 +180,8 @@ void Simulation::set_pinned(std::size_t i, bool pinned) {
         grabbed_was_pinned_ = pinned; // takes effect on release
         return;
     }
-    if (!pinned && inv_mass_authored_[i] == 0.0f) return; // authored pins with no mass stay pinned
-    cloth_.inv_mass[i] = pinned ? 0.0f : inv_mass_authored_[i];
+    if (!pinned && inv_mass_free_[i] == 0.0f) return; // a particle with no known mass stays pinned
+    cloth_.inv_mass[i] = pinned ? 0.0f : inv_mass_free_[i];
     if (pinned) {
         StateBuffer& s = cur();
         if (params_.integrator == Integrator::symplectic_euler) {
@@ -210,7 +211,7 @@ void Simulation::release_grab() noexcept {
     if (grabbed_ == SIZE_MAX) return;
     const std::size_t i = grabbed_;
     grabbed_ = SIZE_MAX;
-    if (!grabbed_was_pinned_) cloth_.inv_mass[i] = inv_mass_authored_[i];
+    if (!grabbed_was_pinned_) cloth_.inv_mass[i] = inv_mass_free_[i];
 }
 
 void Simulation::apply_user_constraints() noexcept {

@@ -61,6 +61,9 @@ struct Cloth {
     std::size_t padded_count = 0;   ///< particle_count rounded up to whole SIMD batches
     std::size_t halo = 0;           ///< zeroed elements on each side of every hot array (grid-kernel reads)
     AlignedArray<float> inv_mass;   ///< 1/kg; 0 = pinned (and for padding)
+    /// 1/kg each particle has when it is not pinned, authored pins included (so the user can unpin them);
+    /// empty = inv_mass.
+    std::vector<float> free_inv_mass;
     std::array<SpringMaterial, spring_kind_count> material{};
     std::vector<Edge> edges;         ///< every spring once (cold list; health and colouring read it)
     SpringGraph graph;               ///< CSR and SIMD-sliced CSR over the edges, seams excepted

@@ -142,8 +142,8 @@ class Simulation {
     void set_params(const SimulationParams& params);
 
     // Constraints from the user (stage 7 of DESIGN.md; applied at the start of each step() call).
-    /// Pins (inverse mass 0, velocity 0) or unpins (original mass restored) particle i. Throws InvalidInput if i is out
-    /// of range.
+    /// Pins (inverse mass 0, velocity 0) or unpins (its mass restored; authored pins too, when the cloth knows their
+    /// mass: Cloth::free_inv_mass) particle i. Throws InvalidInput if i is out of range.
     void set_pinned(std::size_t i, bool pinned);
     bool is_pinned(std::size_t i) const noexcept { return cloth_.inv_mass[i] == 0.0f; }
     /// Grabs particle i: it becomes kinematic and is moved to `target` (m) at the start of every step() call until
@@ -188,7 +188,8 @@ class Simulation {
     // Scratch for the staged pipeline: spring force (N) and external acceleration (m/s^2), sized at construction.
     AlignedArray<float> fx_, fy_, fz_, ax_, ay_, az_;
     std::vector<std::uint8_t> block_ok_; ///< per block: 1 when every value the block wrote is finite
-    std::vector<float> inv_mass_authored_; ///< inverse masses as cooked, for unpinning
+    std::vector<float> inv_mass_authored_; ///< inverse masses as cooked (0 = an authored pin)
+    std::vector<float> inv_mass_free_;     ///< inverse masses when unpinned (Cloth::free_inv_mass)
     // Strain limiting (cooked when first enabled): colour groups over structural, shear and seam springs, with the
     // spring ends and rest lengths copied in group order for linear sweeps.
     ColourGroups limit_groups_;
