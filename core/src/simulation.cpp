@@ -111,17 +111,21 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
     std::memcpy(s.z.data(), initial.z.data(), n * sizeof(float));
     for (std::size_t i = 0; i < n; ++i) {
         const bool pinned = cloth_.inv_mass[i] == 0.0f;
-        const float vel[3] = {pinned ? 0.0f : initial.vx[i], pinned ? 0.0f : initial.vy[i],
-                              pinned ? 0.0f : initial.vz[i]};
-        if (params_.integrator == Integrator::symplectic_euler) {
-            s.u[i] = vel[0];
-            s.v[i] = vel[1];
-            s.w[i] = vel[2];
-        } else { // previous position from the initial velocity
-            s.u[i] = s.x[i] - vel[0] * params_.dt;
-            s.v[i] = s.y[i] - vel[1] * params_.dt;
-            s.w[i] = s.z[i] - vel[2] * params_.dt;
-        }
+        store_velocity(s, i, pinned ? std::array<float, 3>{} : std::array{initial.vx[i], initial.vy[i], initial.vz[i]},
+                       params_.integrator, params_.dt);
+    }
+}
+
+void Simulation::store_velocity(StateBuffer& s, std::size_t i, std::array<float, 3> vel, Integrator integrator,
+                                float dt) noexcept {
+    if (integrator == Integrator::symplectic_euler) {
+        s.u[i] = vel[0];
+        s.v[i] = vel[1];
+        s.w[i] = vel[2];
+    } else { // the previous position that gives this velocity
+        s.u[i] = s.x[i] - vel[0] * dt;
+        s.v[i] = s.y[i] - vel[1] * dt;
+        s.w[i] = s.z[i] - vel[2] * dt;
     }
 }
 
@@ -139,19 +143,8 @@ void Simulation::set_params(const SimulationParams& params) {
     const KernelPath kernel = resolve_params(params);
     // A new integrator or dt changes what u, v, w mean (velocity or previous position): convert them.
     if (params.integrator != params_.integrator || params.dt != params_.dt) {
-        StateBuffer& s = cur();
-        for (std::size_t i = 0; i < cloth_.particle_count; ++i) {
-            const std::array<float, 3> vel = velocity(i);
-            if (params.integrator == Integrator::symplectic_euler) {
-                s.u[i] = vel[0];
-                s.v[i] = vel[1];
-                s.w[i] = vel[2];
-            } else {
-                s.u[i] = s.x[i] - vel[0] * params.dt;
-                s.v[i] = s.y[i] - vel[1] * params.dt;
-                s.w[i] = s.z[i] - vel[2] * params.dt;
-            }
-        }
+        for (std::size_t i = 0; i < cloth_.particle_count; ++i)
+            store_velocity(cur(), i, velocity(i), params.integrator, params.dt);
     }
     params_ = params;
     kernel_ = kernel;
@@ -182,16 +175,7 @@ void Simulation::set_pinned(std::size_t i, bool pinned) {
     }
     if (!pinned && inv_mass_free_[i] == 0.0f) return; // a particle with no known mass stays pinned
     cloth_.inv_mass[i] = pinned ? 0.0f : inv_mass_free_[i];
-    if (pinned) {
-        StateBuffer& s = cur();
-        if (params_.integrator == Integrator::symplectic_euler) {
-            s.u[i] = s.v[i] = s.w[i] = 0.0f;
-        } else {
-            s.u[i] = s.x[i];
-            s.v[i] = s.y[i];
-            s.w[i] = s.z[i];
-        }
-    }
+    if (pinned) store_velocity(cur(), i, {}, params_.integrator, params_.dt);
 }
 
 void Simulation::grab(std::size_t i, std::array<float, 3> target) {
@@ -221,13 +205,7 @@ void Simulation::apply_user_constraints() noexcept {
     s.x[i] = grab_target_[0];
     s.y[i] = grab_target_[1];
     s.z[i] = grab_target_[2];
-    if (params_.integrator == Integrator::symplectic_euler) {
-        s.u[i] = s.v[i] = s.w[i] = 0.0f;
-    } else {
-        s.u[i] = s.x[i];
-        s.v[i] = s.y[i];
-        s.w[i] = s.z[i];
-    }
+    store_velocity(s, i, {}, params_.integrator, params_.dt);
 }
 
 std::array<float, 3> Simulation::velocity(std::size_t i) const noexcept {

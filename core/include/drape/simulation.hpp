@@ -213,6 +213,10 @@ class Simulation {
     bool grabbed_was_pinned_ = false;
     std::array<float, 3> grab_target_{};
     void apply_user_constraints() noexcept;
+    /// Writes velocity `vel` (m/s) of particle i into s in the integrator's form: u, v, w = vel (symplectic Euler) or
+    /// the previous position x - vel dt (Verlet).
+    static void store_velocity(StateBuffer& s, std::size_t i, std::array<float, 3> vel, Integrator integrator,
+                               float dt) noexcept;
 };
 
 /// Validates run parameters (ranges, not stability); throws InvalidInput.
