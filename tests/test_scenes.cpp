@@ -169,3 +169,33 @@ TEST(Scenes, MinimalFileGetsTheHangDefaults) {
 }
 
 } // namespace
+
+namespace {
+
+TEST(Scenes, OutlinePanelsSewnIntoABag) {
+    const std::string path = std::string(DRAPE_SOURCE_DIR) + "/scenes/examples/bag.json";
+    BuiltScene b = build_scene(load_scene(path));
+    EXPECT_GT(b.cloth.particle_count, 1000u);
+    EXPECT_GT(b.cloth.seams.a.size(), 40u);
+    std::size_t pinned = 0;
+    for (std::size_t i = 0; i < b.cloth.particle_count; ++i) pinned += b.cloth.inv_mass[i] == 0.0f;
+    EXPECT_GT(pinned, 10u) << "the top edge of both panels";
+    Simulation sim(std::move(b.cloth), b.initial, b.params);
+    sim.step(2000);
+    const Health h = sim.health();
+    EXPECT_TRUE(h.finite);
+    EXPECT_LT(h.max_structural_strain, 0.1f + 1e-3f);
+}
+
+TEST(Scenes, BrokenOutlinesGiveClearErrors) {
+    const std::string bow_tie = R"({"cloth": {"type": "outline", "outline": [[0,0],[1,1],[1,0],[0,1]]}})";
+    EXPECT_TRUE(has(error_of(bow_tie), "cloth.outline")) << error_of(bow_tie);
+    const std::string two = R"({"cloth": {"type": "outline", "outline": [[0,0],[1,1]]}})";
+    EXPECT_TRUE(has(error_of(two), "3 to 4096")) << error_of(two);
+    const std::string sew = R"({"cloth": {"type": "outline", "outline": [[0,0],[1,0],[0,1]], "copy": {"sew": [[0, 7]]}}})";
+    EXPECT_TRUE(has(error_of(sew), "cloth.copy.sew[0]")) << error_of(sew);
+    const std::string huge = R"({"cloth": {"type": "outline", "outline": [[0,0],[100,0],[0,100]], "spacing": 0.001}})";
+    EXPECT_TRUE(has(error_of(huge), "particles")) << error_of(huge);
+}
+
+} // namespace

@@ -191,9 +191,50 @@ SceneSpec parse_scene(const std::string& text, const std::string& source) {
 
     // cloth
     ObjectReader cloth = root.object("cloth");
-    const std::string type = cloth.text("type", {"grid", "tshirt"}, "grid");
-    s.cloth = type == "tshirt" ? ClothType::tshirt : ClothType::grid;
-    if (s.cloth == ClothType::grid) {
+    const std::string type = cloth.text("type", {"grid", "tshirt", "outline"}, "grid");
+    s.cloth = type == "tshirt" ? ClothType::tshirt : type == "outline" ? ClothType::outline : ClothType::grid;
+    if (s.cloth == ClothType::outline) {
+        OutlineClothSpec& o = s.outline;
+        const json* pts = cloth.array("outline", 4096);
+        if (!pts || pts->size() < 3) cloth.fail(cloth.at("outline"), "must list 3 to 4096 [u, v] vertices (m)");
+        for (std::size_t k = 0; k < pts->size(); ++k) {
+            const json& v = (*pts)[k];
+            const std::string where = cloth.at("outline") + "[" + std::to_string(k) + "]";
+            if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number())
+                cloth.fail(where, "must be [u, v], two numbers in metres");
+            const double u = v[0].get<double>(), w = v[1].get<double>();
+            if (!(std::fabs(u) <= 100.0 && std::fabs(w) <= 100.0))
+                cloth.fail(where, "is outside the allowed range [-100, 100] m");
+            o.outline.outline.push_back({u, w});
+        }
+        o.spacing = static_cast<float>(cloth.number("spacing", 1e-3, 1.0, " m", o.spacing));
+        o.density = static_cast<float>(cloth.number("density", 1e-3, 10.0, " kg/m^2", o.density));
+        o.plane = cloth.text("plane", {"horizontal", "vertical"}, "horizontal") == "vertical" ? GridPlane::vertical
+                                                                                             : GridPlane::horizontal;
+        o.centre = cloth.vec3("centre", 1000.0, " m", o.centre);
+        o.pin_top = cloth.text("pins", {"none", "top_edge"}, "none") == "top_edge";
+        ObjectReader copy = cloth.object("copy");
+        o.copy = cloth.has("copy");
+        o.gap = static_cast<float>(copy.number("gap", 1e-3, 2.0, " m", o.gap));
+        o.seam_rest_ratio = static_cast<float>(copy.number("seam_rest_ratio", 0.01, 2.0, "", o.seam_rest_ratio));
+        if (const json* sew = copy.array("sew", 4096)) {
+            for (std::size_t k = 0; k < sew->size(); ++k) {
+                const json& v = (*sew)[k];
+                const std::string where = copy.at("sew") + "[" + std::to_string(k) + "]";
+                if (!v.is_array() || v.size() != 2 || !v[0].is_number_unsigned() || !v[1].is_number_unsigned() ||
+                    v[0].get<std::uint64_t>() >= pts->size() || v[1].get<std::uint64_t>() >= pts->size())
+                    cloth.fail(where, "must be [from vertex, to vertex], indices in [0, " +
+                                          std::to_string(pts->size() - 1) + "]");
+                o.sew.push_back({v[0].get<std::uint32_t>(), v[1].get<std::uint32_t>()});
+            }
+        }
+        copy.finish();
+        try {
+            check_outline(o.outline);
+        } catch (const InvalidInput& e) {
+            cloth.fail(cloth.at("outline") + ":", e.what());
+        }
+    } else if (s.cloth == ClothType::grid) {
         HangParams& g = s.grid;
         g.n = cloth.integer("n", hang_min_n, hang_max_n, 100);
         g.size = static_cast<float>(cloth.number("size", 0.01, 100.0, " m", 1.0));
@@ -297,6 +338,14 @@ SceneSpec load_scene(const std::string& name_or_path) {
 
 std::size_t scene_particle_count(const SceneSpec& s) {
     if (s.cloth == ClothType::grid) return std::size_t{s.grid.n} * s.grid.n;
+    if (s.cloth == ClothType::outline) { // bounding box / spacing^2, per panel (an upper bound)
+        double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
+        for (const auto& v : s.outline.outline.outline)
+            for (int k = 0; k < 2; ++k) lo[k] = std::min(lo[k], v[k]), hi[k] = std::max(hi[k], v[k]);
+        const double h = s.outline.spacing;
+        const double per_panel = ((hi[0] - lo[0]) / h + 2) * ((hi[1] - lo[1]) / h + 2);
+        return static_cast<std::size_t>(std::min(per_panel * (s.outline.copy ? 2 : 1), 1e12));
+    }
     const double r = s.tshirt.cells_per_metre;
     return static_cast<std::size_t>(0.8 * r * r) + 64; // the mask's area is ~0.39 m^2 per panel (panels.hpp)
 }
@@ -312,6 +361,56 @@ BuiltScene build_scene(const SceneSpec& s) {
         SceneBuild b = build_hang_scene(g);
         out.cloth = std::move(b.cloth);
         out.initial = std::move(b.initial);
+    } else if (s.cloth == ClothType::outline) {
+        const OutlineClothSpec& o = s.outline;
+        double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
+        for (const auto& v : o.outline.outline)
+            for (int k = 0; k < 2; ++k) lo[k] = std::min(lo[k], v[k]), hi[k] = std::max(hi[k], v[k]);
+        const float cu = float(0.5 * (lo[0] + hi[0])), cv = float(0.5 * (lo[1] + hi[1]));
+        // Panel frame: u along +x; v along +z (horizontal) or -y (vertical); the normal u x v is -y or -z.
+        PanelFrame frame;
+        frame.axis_v = o.plane == GridPlane::horizontal ? std::array{0.0f, 0.0f, 1.0f} : std::array{0.0f, -1.0f, 0.0f};
+        const std::array<float, 3> normal = o.plane == GridPlane::horizontal ? std::array{0.0f, -1.0f, 0.0f}
+                                                                           : std::array{0.0f, 0.0f, -1.0f};
+        const float half_gap = o.copy ? 0.5f * o.gap : 0.0f;
+        for (int k = 0; k < 3; ++k)
+            frame.origin[k] = o.centre[k] - cu * frame.axis_u[k] - cv * frame.axis_v[k] - half_gap * normal[k];
+        OutlinePanelParams op;
+        op.spacing = o.spacing;
+        op.areal_density = o.density;
+        GarmentAssembly a;
+        const OutlinePanelBuild front = add_outline_panel(a, o.outline, op, frame);
+        if (o.copy) {
+            PanelFrame back = frame;
+            for (int k = 0; k < 3; ++k) back.origin[k] += 2.0f * half_gap * normal[k];
+            const OutlinePanelBuild rear = add_outline_panel(a, o.outline, op, back);
+            for (const auto& [from, to] : o.sew) {
+                const OutlineStretch stretch{from, to, false};
+                sew_by_arc_length(a, outline_stretch_particles(front, stretch), outline_stretch_particles(rear, stretch),
+                                  o.seam_rest_ratio * o.spacing);
+            }
+        }
+        std::vector<float> inv_mass = a.inverse_masses();
+        const std::vector<float> free_inv_mass = inv_mass;
+        if (o.pin_top) { // the particles along the top (vertical) or the far edge (horizontal: largest z)
+            const bool vertical = o.plane == GridPlane::vertical;
+            float top = -1e30f;
+            for (std::size_t i = 0; i < a.particle_count(); ++i) top = std::max(top, vertical ? a.y[i] : a.z[i]);
+            for (std::size_t i = 0; i < a.particle_count(); ++i)
+                if ((vertical ? a.y[i] : a.z[i]) >= top - 0.25f * o.spacing) inv_mass[i] = 0.0f;
+        }
+        // Material: stiffness per kind as for the other cloths; the damping ratio uses the mean particle mass.
+        double total = 0.0;
+        for (float m : a.mass) total += m;
+        const float mean_mass = float(total / double(std::max<std::size_t>(1, a.particle_count())));
+        std::array<SpringMaterial, spring_kind_count> material{};
+        const float ks[4] = {s.stiffness, s.stiffness * s.shear_ratio, s.stiffness * s.bend_ratio, s.seam_stiffness};
+        for (int kind = 0; kind < 4; ++kind)
+            material[kind] = {ks[kind], s.damping_ratio * 2.0f * std::sqrt(ks[kind] * mean_mass * 0.5f)};
+        out.cloth = cook_cloth(inv_mass, a.edges, material);
+        out.cloth.triangles = a.triangles;
+        out.cloth.free_inv_mass = free_inv_mass;
+        out.initial = a.initial_state();
     } else {
         const TShirtBuild t = build_tshirt(s.tshirt);
         const GarmentAssembly& a = t.assembly;

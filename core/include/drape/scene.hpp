@@ -16,7 +16,22 @@
 
 namespace drape {
 
-enum class ClothType : std::uint8_t { grid, tshirt };
+enum class ClothType : std::uint8_t { grid, tshirt, outline };
+
+/// cloth.type = "outline": a panel cut from an outline polygon (seed 004: filled, Delaunay-triangulated), optionally
+/// with an identical second panel `gap` behind it, sewn to it along outline stretches (a bag, a pillow).
+struct OutlineClothSpec {
+    OutlinePanel outline;            ///< vertices in panel coordinates (u, v), m
+    float spacing = 0.03f;           ///< m
+    float density = 0.15f;           ///< kg/m^2
+    GridPlane plane = GridPlane::horizontal;
+    std::array<float, 3> centre{0.0f, 0.0f, 0.0f}; ///< where the outline's bounding-box centre goes, m
+    bool pin_top = false;            ///< pin the particles along the top (vertical plane) / far edge
+    bool copy = false;               ///< add the second panel
+    float gap = 0.1f;                ///< m between the panels
+    std::vector<std::array<std::uint32_t, 2>> sew; ///< outline stretches (from vertex, to vertex) sewn together
+    float seam_rest_ratio = 0.5f;    ///< seam rest length / spacing
+};
 
 /// Everything a scene file holds (cold tier). Defaults are those of "hang".
 struct SceneSpec {
@@ -25,6 +40,7 @@ struct SceneSpec {
     ClothType cloth = ClothType::grid;
     HangParams grid;      ///< cloth.type = "grid" (n, size, mass, plane, centre, pins, material)
     TShirtParams tshirt;  ///< cloth.type = "tshirt"
+    OutlineClothSpec outline; ///< cloth.type = "outline"
     /// Material (N/m; damping as a fraction of critical, like HangParams).
     float stiffness = 1000.0f, shear_ratio = 0.5f, bend_ratio = 0.1f, damping_ratio = 0.05f;
     float seam_stiffness = 1000.0f; ///< N/m, seam springs (tshirt)
