@@ -87,6 +87,17 @@ inline void normalize_or_up(float& nx, float& ny, float& nz) noexcept {
     }
 }
 
+/// Stores vertex k (position, unit normal) into the six planes of `out`, each `plane` floats long.
+inline void store_vertex(float* out, std::size_t plane, std::size_t k, float px, float py, float pz, float nx, float ny,
+                         float nz) noexcept {
+    out[0 * plane + k] = px;
+    out[1 * plane + k] = py;
+    out[2 * plane + k] = pz;
+    out[3 * plane + k] = nx;
+    out[4 * plane + k] = ny;
+    out[5 * plane + k] = nz;
+}
+
 inline bool finite3(float a, float b, float c) noexcept {
     return std::isfinite(a) && std::isfinite(b) && std::isfinite(c);
 }
@@ -273,12 +284,7 @@ void Publisher::grid_vertex_scalar(std::size_t k, Positions p, float* out, float
     if (mask & spring_south_bit)
         strain = std::max(strain, spring_strain(ex[south], ey[south], ez[south], rest_south_));
     finite = finite && finite3(px, py, pz) && finite3(nx, ny, nz);
-    out[0 * plane + k] = px;
-    out[1 * plane + k] = py;
-    out[2 * plane + k] = pz;
-    out[3 * plane + k] = nx;
-    out[4 * plane + k] = ny;
-    out[5 * plane + k] = nz;
+    store_vertex(out, plane, k, px, py, pz, nx, ny, nz);
 }
 
 void Publisher::block_grid(std::size_t block, Positions p, float* out) noexcept {
@@ -369,12 +375,7 @@ void Publisher::block_general(std::size_t block, Positions p, float* out) noexce
         }
         normalize_or_up(nx, ny, nz);
         finite = finite && finite3(px, py, pz) && finite3(nx, ny, nz);
-        out[0 * plane + k] = px;
-        out[1 * plane + k] = py;
-        out[2 * plane + k] = pz;
-        out[3 * plane + k] = nx;
-        out[4 * plane + k] = ny;
-        out[5 * plane + k] = nz;
+        store_vertex(out, plane, k, px, py, pz, nx, ny, nz);
     }
     for (std::size_t k = real_end; k < end; ++k)
         for (std::size_t q = 0; q < vertex_plane_count; ++q)
