@@ -349,6 +349,18 @@ void ViewSession::restore(const Snapshot& b) {
     spacing_ = b.spacing;
 }
 
+bool ViewSession::commit_params(const SimulationParams& p) {
+    // set_params leaves the simulation as it was when it refuses, so no snapshot is needed (unlike guarded()).
+    try {
+        sim_->set_params(p);
+    } catch (const InvalidInput& e) {
+        post(MessageLevel::warning, std::string("refused: ") + e.what());
+        return false;
+    }
+    params_ = p;
+    return true;
+}
+
 bool ViewSession::guarded(const std::string& what, const std::function<void()>& change) {
     // Rebuilds are transactional: on bad input or no memory the old cloth and settings stay, with a message.
     const Snapshot before = snapshot();
@@ -549,23 +561,20 @@ void ViewSession::set_gravity(const std::array<float, 3>& g) {
     SimulationParams p = sim_->params();
     for (int i = 0; i < 3; ++i)
         p.gravity[i] = std::clamp(g[i], -50.0f, 50.0f);
-    sim_->set_params(p);
-    params_ = p;
+    commit_params(p);
 }
 
 void ViewSession::set_wind(bool enabled, float strength) {
     SimulationParams p = sim_->params();
     p.wind.enabled = enabled;
     p.wind.strength = std::clamp(strength, 0.0f, 100.0f);
-    sim_->set_params(p);
-    params_ = p;
+    commit_params(p);
 }
 
 void ViewSession::set_integrator(Integrator integrator) {
     SimulationParams p = sim_->params();
     p.integrator = integrator;
-    sim_->set_params(p);
-    params_ = p;
+    if (!commit_params(p)) return;
     post(MessageLevel::info, std::string("integrator: ") + integrator_name(integrator));
 }
 
@@ -574,13 +583,7 @@ void ViewSession::set_strain_limit(const StrainLimit& limit) {
     p.strain_limit.ratio = std::clamp(limit.ratio, 0.0f, 10.0f);
     p.strain_limit.passes = std::clamp<std::uint32_t>(limit.passes, 1, 100);
     p.strain_limit.every = std::clamp<std::uint32_t>(limit.every, 1, 1000);
-    try {
-        sim_->set_params(p);
-    } catch (const InvalidInput& e) {
-        post(MessageLevel::warning, std::string("refused: ") + e.what());
-        return;
-    }
-    params_ = p;
+    commit_params(p);
 }
 
 void ViewSession::set_dt(double dt) {
@@ -591,13 +594,7 @@ void ViewSession::set_dt(double dt) {
     SimulationParams p = sim_->params();
     p.dt = static_cast<float>(dt);
     if (double(p.dt) > top) p.dt = std::nextafter(p.dt, 0.0f);
-    try {
-        sim_->set_params(p);
-    } catch (const InvalidInput& e) {
-        post(MessageLevel::warning, std::string("refused: ") + e.what());
-        return;
-    }
-    params_ = p;
+    if (!commit_params(p)) return;
     auto_dt_ = false;
     if (auto_substeps_)
         substeps_ = auto_substep_count(dt);

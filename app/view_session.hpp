@@ -193,6 +193,9 @@ class ViewSession {
     /// Runs a change that rebuilds; on InvalidInput or bad_alloc restores the settings (the old simulation
     /// was never replaced) and posts a message. Returns whether it applied.
     bool guarded(const std::string& what, const std::function<void()>& change);
+    /// Applies run parameters to the simulation and keeps them; a refused change (unstable, out of range) posts a
+    /// message and changes nothing. Returns whether it was applied.
+    bool commit_params(const SimulationParams& p);
     void refresh_pins();
     void load_spec(SceneSpec spec, std::optional<std::uint32_t> size);
     std::size_t particle_count() const noexcept { return sim_ ? sim_->cloth().particle_count : 1; }
