@@ -71,7 +71,10 @@ int run_command(const RunOptions& o) {
     } catch (const InvalidInput& e) {
         throw InvalidInput(std::string("--scene: ") + e.what());
     }
+    for (const std::string& w : spec.warnings) std::cerr << "drape run: warning: " << w << "\n";
     if (o.size) {
+        if (spec.cloth == ClothType::mesh)
+            throw InvalidInput("--size: the scene's cloth is a mesh; its resolution is that of its OBJ file");
         if (spec.cloth == ClothType::grid) {
             if (*o.size < hang_min_n || *o.size > hang_max_n)
                 throw InvalidInput("--size: value " + std::to_string(*o.size) + " is outside the allowed range [" +

@@ -70,6 +70,37 @@ else
     echo "ok: --export-obj -> $frames frames"
 fi
 
+# A mesh cloth from an OBJ file (scenes/examples/mesh_disc.json -> tests/data/disc.obj, 469 vertices) runs and exports.
+repo=$(cd "$(dirname "$0")/.." && pwd)
+if ! "$DRAPE" run --scene "$repo/scenes/examples/mesh_disc.json" --sim-seconds 0.5 --export-obj "$tmpdir/mesh" \
+        --json >"$out" 2>"$err" || [ -s "$err" ]; then
+    echo "FAIL: mesh_disc run"; cat "$err"; fail=1
+fi
+mesh_frames=$(ls "$tmpdir/mesh" 2>/dev/null | wc -l)
+last=$(ls "$tmpdir/mesh" 2>/dev/null | tail -1)
+if [ "$mesh_frames" -lt 2 ] || [ "$(grep -c '^v ' "$tmpdir/mesh/$last")" != 469 ] || \
+   [ "$(grep -c '^f ' "$tmpdir/mesh/$last")" != 864 ] || \
+   ! python3 -c "import json,sys; j=json.load(open('$out')); assert j['particles'] == 469 and j['finite'] is True, j"; then
+    echo "FAIL: mesh_disc export: $mesh_frames frames, last $last"; fail=1
+else
+    echo "ok: mesh_disc -> $mesh_frames OBJ frames of 469 vertices, 864 triangles"
+fi
+# Broken OBJ files: exit 2, one line naming the scene, cloth.file and what is wrong.
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 7\n' >"$tmpdir/range.obj"
+printf 'this is not\x01 an OBJ file\n' >"$tmpdir/garbage.obj"
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\n' >"$tmpdir/noface.obj"
+printf 'v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n' >"$tmpdir/nan.obj"
+for obj in missing range garbage noface nan; do
+    echo "{\"cloth\": {\"type\": \"mesh\", \"file\": \"$obj.obj\"}}" >"$tmpdir/mesh_$obj.json"
+done
+expect_error "mesh_missing.json: cloth.file \"missing.obj\": $tmpdir/missing.obj: cannot open the OBJ file" \
+    run --scene "$tmpdir/mesh_missing.json"
+expect_error "range.obj: line 5: face vertex index 7 is outside [1, 3]" run --scene "$tmpdir/mesh_range.json"
+expect_error "garbage.obj: no triangle (the file has no faces" run --scene "$tmpdir/mesh_garbage.json"
+expect_error "noface.obj: no triangle (the file has no faces" run --scene "$tmpdir/mesh_noface.json"
+expect_error "nan.obj: line 2: vertex coordinate 'nan' is not a finite number" run --scene "$tmpdir/mesh_nan.json"
+expect_error "--size: the scene's cloth is a mesh" run --scene "$repo/scenes/examples/mesh_disc.json" --size 50
+
 # --json: exactly one JSON object with the BENCH.md fields.
 if ! "$DRAPE" run --scene hang --size 40 --threads 2 --steps 50 --json >"$out" 2>"$err"; then
     echo "FAIL: --json run exited non-zero"; cat "$err"; fail=1
