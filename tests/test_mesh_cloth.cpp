@@ -277,6 +277,19 @@ TEST(MeshCloth, ParseObjMeshDirectly) {
     EXPECT_EQ(m.cleaning_note(), "");
 }
 
+TEST(MeshCloth, TooManyVerticesAreRefusedBeforeParsing) {
+    // The limit is 16,777,216; a test file that size would be 134 MB, so the same check runs with a limit of 3.
+    const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    EXPECT_EQ(parse_obj_mesh(tri, "three.obj", 3).particle_count(), 3u);
+    try {
+        parse_obj_mesh("v 0 0 1\n" + tri, "four.obj", 3);
+        ADD_FAILURE() << "four vertices accepted with a limit of 3";
+    } catch (const InvalidInput& e) {
+        EXPECT_EQ(std::string(e.what()), "four.obj: line 4: more than 3 vertices (a mesh cloth has at most 3 particles)");
+    }
+    EXPECT_EQ(mesh_max_vertices, 16777216u);
+}
+
 TEST(MeshCloth, ScaleAndCentreAndSaveReload) {
     write_file("tri2.obj", "v 10 10 10\nv 12 10 10\nv 10 12 10\nf 1 2 3\n");
     const std::string scene =

@@ -29,7 +29,7 @@ struct PrePass {
 };
 
 /// One line of OBJ text at a time: vertices checked and read, face indices checked against the vertex count.
-PrePass pre_pass(const std::string& text, const std::string& source) {
+PrePass pre_pass(const std::string& text, const std::string& source, std::size_t max_vertices) {
     PrePass out;
     std::size_t line_no = 0, max_index = 0, max_index_line = 0;
     std::size_t pos = 0;
@@ -67,8 +67,9 @@ PrePass pre_pass(const std::string& text, const std::string& source) {
                 if (!std::isfinite(c[k]) || std::fabs(c[k]) > 1e30)
                     fail("vertex coordinate '" + tokens[k].substr(0, 40) + "' is not a finite number (|x| <= 1e30)");
             }
-            if (out.x.size() >= mesh_max_vertices)
-                fail("more than " + std::to_string(mesh_max_vertices) + " vertices (at most 16,777,216 are allowed)");
+            if (out.x.size() >= max_vertices)
+                fail("more than " + std::to_string(max_vertices) + " vertices (a mesh cloth has at most " +
+                     std::to_string(max_vertices) + " particles)");
             out.x.push_back(c[0]);
             out.y.push_back(c[1]);
             out.z.push_back(c[2]);
@@ -161,8 +162,8 @@ std::string TriangleMesh::cleaning_note() const {
     return note;
 }
 
-TriangleMesh parse_obj_mesh(const std::string& text, const std::string& source) {
-    PrePass pre = pre_pass(text, source);
+TriangleMesh parse_obj_mesh(const std::string& text, const std::string& source, std::size_t max_vertices) {
+    PrePass pre = pre_pass(text, source, std::min(max_vertices, mesh_max_vertices));
 
     tinyobj::attrib_t attrib;
     std::vector<tinyobj::shape_t> shapes;

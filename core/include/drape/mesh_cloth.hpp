@@ -51,8 +51,10 @@ struct TriangleMesh {
 
 /// Parses OBJ text. `source` names it in messages. Throws InvalidInput "source: line N: what" (or without the line
 /// when tinyobjloader gives none): a malformed or non-finite coordinate, a face index out of range, no triangle, too
-/// many vertices, any tinyobjloader error or warning (material warnings excepted: materials are ignored).
-TriangleMesh parse_obj_mesh(const std::string& text, const std::string& source);
+/// many vertices (more than `max_vertices`, 16,777,216 unless a test asks for fewer), any tinyobjloader error or
+/// warning (material warnings excepted: materials are ignored).
+TriangleMesh parse_obj_mesh(const std::string& text, const std::string& source,
+                            std::size_t max_vertices = mesh_max_vertices);
 
 /// Reads an OBJ file (a regular file of at most 1 GiB) and parses it. Throws InvalidInput naming the path.
 TriangleMesh load_obj_mesh(const std::string& path);
