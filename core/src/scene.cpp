@@ -373,8 +373,9 @@ BuiltScene build_scene(const SceneSpec& s) {
         const std::array<float, 3> normal = o.plane == GridPlane::horizontal ? std::array{0.0f, -1.0f, 0.0f}
                                                                            : std::array{0.0f, 0.0f, -1.0f};
         const float half_gap = o.copy ? 0.5f * o.gap : 0.0f;
+        // Positions relative to o.centre, the frame's origin (Cloth::origin, set below).
         for (int k = 0; k < 3; ++k)
-            frame.origin[k] = o.centre[k] - cu * frame.axis_u[k] - cv * frame.axis_v[k] - half_gap * normal[k];
+            frame.origin[k] = -cu * frame.axis_u[k] - cv * frame.axis_v[k] - half_gap * normal[k];
         OutlinePanelParams op;
         op.spacing = o.spacing;
         op.areal_density = o.density;
@@ -410,6 +411,7 @@ BuiltScene build_scene(const SceneSpec& s) {
         out.cloth = cook_cloth(inv_mass, a.edges, material);
         out.cloth.triangles = a.triangles;
         out.cloth.free_inv_mass = free_inv_mass;
+        out.cloth.origin = {double(o.centre[0]), double(o.centre[1]), double(o.centre[2])};
         out.initial = a.initial_state();
     } else {
         const TShirtBuild t = build_tshirt(s.tshirt);
@@ -428,6 +430,9 @@ BuiltScene build_scene(const SceneSpec& s) {
         const std::vector<Collider> body = default_body();
         out.params.colliders.insert(out.params.colliders.end(), body.begin(), body.end());
     }
+    // The colliders into the cloth's frame (positions relative to Cloth::origin, the cloth's centre).
+    const std::array<double, 3>& origin = out.cloth.origin;
+    for (Collider& c : out.params.colliders) c = translated(c, {-origin[0], -origin[1], -origin[2]});
     out.params.dt = s.dt ? *s.dt : static_cast<float>(default_dt(out.cloth, out.params.air_drag));
     return out;
 }

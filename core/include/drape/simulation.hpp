@@ -79,7 +79,7 @@ struct SimulationParams {
     KernelPath kernel = KernelPath::automatic;
     bool fused = true; ///< false runs each stage as its own pass (reference / per-stage profiling)
     StrainLimit strain_limit;
-    std::vector<Collider> colliders; ///< analytic colliders, applied in order after strain limiting
+    std::vector<Collider> colliders; ///< analytic colliders (relative to Cloth::origin), applied after strain limiting
 };
 
 /// Hot state: one buffer of the double-buffered SoA arrays. u, v, w hold velocities (symplectic Euler) or the
@@ -119,7 +119,10 @@ class Simulation {
     std::size_t steps_done() const noexcept { return steps_done_; }
     double time() const noexcept { return static_cast<double>(steps_done_) * params_.dt; }
 
-    /// Current positions (particle_count entries each).
+    /// The frame's origin (world coordinates, m): positions, colliders and grab targets are relative to it
+    /// (Cloth::origin).
+    const std::array<double, 3>& origin() const noexcept { return cloth_.origin; }
+    /// Current positions relative to origin(), m (particle_count entries each).
     std::span<const float> x() const noexcept { return {cur().x.data(), cloth_.particle_count}; }
     std::span<const float> y() const noexcept { return {cur().y.data(), cloth_.particle_count}; }
     std::span<const float> z() const noexcept { return {cur().z.data(), cloth_.particle_count}; }
@@ -146,7 +149,7 @@ class Simulation {
     /// mass: Cloth::free_inv_mass) particle i. Throws InvalidInput if i is out of range.
     void set_pinned(std::size_t i, bool pinned);
     bool is_pinned(std::size_t i) const noexcept { return cloth_.inv_mass[i] == 0.0f; }
-    /// Grabs particle i: it becomes kinematic and is moved to `target` (m) at the start of every step() call until
+    /// Grabs particle i: it becomes kinematic and is moved to `target` (m, relative to origin()) at the start of every step() call until
     /// release_grab(). Grabbing another particle releases the previous one. A grabbed particle that was pinned
     /// stays pinned when released.
     void grab(std::size_t i, std::array<float, 3> target);
