@@ -28,8 +28,8 @@ std::string ObjExporter::write(const Simulation& sim, std::size_t index) {
     const float* p = planes_.data();
     std::fprintf(f, "# drape frame %zu, t = %.6f s, %zu vertices, %zu triangles\n", index, sim.time(), n,
                  triangles_.size() / 3);
-    // World positions: the simulation's origin added back in double, with digits enough for the float32 relative
-    // position when the origin is away from zero (1000 m + 1 nm).
+    // World positions: the simulation's origin added back in double, with digits enough for the float32
+    // relative position when the origin is away from zero (1000 m + 1 nm).
     const std::array<double, 3>& o = sim.origin();
     const bool shifted = o[0] != 0.0 || o[1] != 0.0 || o[2] != 0.0;
     for (std::size_t i = 0; i < n; ++i)

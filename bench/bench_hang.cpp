@@ -36,7 +36,8 @@ Simulation& simulation(std::uint32_t n, KernelPath kernel, bool fused) {
     return *slot;
 }
 
-/// A task arena of exactly `threads` workers (also above the core count), one per count, kept for the whole run.
+/// A task arena of exactly `threads` workers (also above the core count), one per count, kept for the whole
+/// run.
 Workers& workers(std::int64_t threads) {
     static std::map<std::int64_t, std::unique_ptr<Workers>> cache;
     static std::mutex mutex;
@@ -68,7 +69,8 @@ void run_substep(benchmark::State& state, KernelPath kernel, bool fused) {
     const std::size_t k = substeps_per_iteration(sim.cloth().particle_count);
     w.run([&] {
         sim.step(k); // warm-up: caches, thread pool
-        for (auto _ : state) sim.step(k);
+        for (auto _ : state)
+            sim.step(k);
     });
     set_labels(state, sim, k);
     state.counters["threads"] = double(w.workers());
@@ -86,7 +88,8 @@ void BM_Stage(benchmark::State& state) {
     Simulation& sim = simulation(n, KernelPath::grid, false);
     w.run([&] {
         sim.run_stage(stage);
-        for (auto _ : state) sim.run_stage(stage);
+        for (auto _ : state)
+            sim.run_stage(stage);
     });
     state.counters["particle_substeps_per_second"] =
         benchmark::Counter(double(sim.cloth().particle_count) * double(state.iterations()), benchmark::Counter::kIsRate);
@@ -114,7 +117,8 @@ void BM_StrainLimit(benchmark::State& state) {
     }
     Simulation& sim = *slot;
     w.run([&] {
-        for (auto _ : state) sim.run_stage(Stage::strain_limit);
+        for (auto _ : state)
+            sim.run_stage(Stage::strain_limit);
     });
     const double springs = double(sim.strain_limit_groups().edge_index.size());
     state.counters["springs_per_second"] =

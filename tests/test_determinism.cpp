@@ -1,10 +1,12 @@
-// Results are bitwise identical for every number of worker threads (DESIGN.md invariant). Each run happens inside a
-// drape::Workers arena of exactly that many workers (1, 2, 3, 5 and 8: more than the cores of a small machine, so
-// the workers really interleave), and every result equals the serial twin (Simulation::step_serial).
+// Results are bitwise identical for every number of worker threads (DESIGN.md invariant). Each run happens
+// inside a drape::Workers arena of exactly that many workers (1, 2, 3, 5 and 8: more than the cores of a
+// small machine, so the workers really interleave), and every result equals the serial twin
+// (Simulation::step_serial).
 //
 // Covered: every built-in scene (hang, drape, sphere, flag, tshirt) at a small size, with what the scene has
-// (strain limiting, analytic and aerodynamic wind, seams, colliders in contact from the first substep), for both
-// integrators, both spring kernels (grid scenes; the T-shirt has CSR only) and every solver in `solvers()`.
+// (strain limiting, analytic and aerodynamic wind, seams, colliders in contact from the first substep), for
+// both integrators, both spring kernels (grid scenes; the T-shirt has CSR only) and every solver in
+// `solvers()`.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -22,9 +24,9 @@ namespace {
 
 constexpr int worker_counts[] = {1, 2, 3, 5, 8};
 
-/// A way of advancing the cloth. drape has one solver today (explicit, with the integrator as a sub-choice); a
-/// second one (e.g. implicit) is added here with whatever it needs set on the scene, and every scene, integrator and
-/// kernel below is then checked with it too.
+/// A way of advancing the cloth. drape has one solver today (explicit, with the integrator as a sub-choice);
+/// a second one (e.g. implicit) is added here with whatever it needs set on the scene, and every scene,
+/// integrator and kernel below is then checked with it too.
 struct Solver {
     const char* name;
     std::function<void(SceneSpec&)> configure;
@@ -33,8 +35,9 @@ std::vector<Solver> solvers() {
     return {{"explicit", [](SceneSpec&) {}}};
 }
 
-/// A built-in scene made small (a few thousand particles: several 1024-particle blocks, several collide and strain
-/// chunks), with the cloth moved into contact with its colliders so the collide stage works from the first substep.
+/// A built-in scene made small (a few thousand particles: several 1024-particle blocks, several collide and
+/// strain chunks), with the cloth moved into contact with its colliders so the collide stage works from the
+/// first substep.
 SceneSpec small_scene(const std::string& name) {
     SceneSpec s = load_scene(name);
     if (s.cloth == ClothType::grid) s.grid.n = 72; // 5,184 particles = 6 blocks
@@ -80,12 +83,13 @@ TEST_P(SceneDeterminism, SameBitsAtEveryWorkerCountAndSerially) {
                 const RunSpec r{spec, integ, kernel, 40};
                 const std::uint64_t serial = checksum(r, 0);
                 for (int w : worker_counts)
-                    EXPECT_EQ(serial, checksum(r, w)) << GetParam() << ", " << solver.name << ", "
-                                                      << integrator_name(integ) << ", " << kernel_path_name(kernel)
-                                                      << ": " << w << " workers";
-                std::printf("[ checksum ] %s %s %s %s, 40 substeps: %016llx (serial; 1, 2, 3, 5, 8 workers)\n",
-                            GetParam().c_str(), solver.name, integrator_name(integ), kernel_path_name(kernel),
-                            static_cast<unsigned long long>(serial));
+                    EXPECT_EQ(serial, checksum(r, w))
+                        << GetParam() << ", " << solver.name << ", " << integrator_name(integ) << ", "
+                        << kernel_path_name(kernel) << ": " << w << " workers";
+                std::printf(
+                    "[ checksum ] %s %s %s %s, 40 substeps: %016llx (serial; 1, 2, 3, 5, 8 workers)\n",
+                    GetParam().c_str(), solver.name, integrator_name(integ), kernel_path_name(kernel),
+                    static_cast<unsigned long long>(serial));
             }
         }
 }
@@ -100,7 +104,8 @@ TEST(SceneDeterminism, ScenesUseTheStagesTheyClaim) {
         BuiltScene b = build_scene(spec);
         Simulation sim(std::move(b.cloth), b.initial, b.params);
         std::string all;
-        for (const std::string& s : sim.stage_names()) all += s + " ";
+        for (const std::string& s : sim.stage_names())
+            all += s + " ";
         return all;
     };
     EXPECT_NE(stages("drape").find("strain_limit"), std::string::npos);
@@ -116,7 +121,8 @@ TEST(SceneDeterminism, ScenesUseTheStagesTheyClaim) {
         SceneSpec free = spec;
         free.physics.colliders.clear();
         BuiltScene f = build_scene(free);
-        Simulation with(std::move(b.cloth), b.initial, b.params), without(std::move(f.cloth), f.initial, f.params);
+        Simulation with(std::move(b.cloth), b.initial, b.params),
+            without(std::move(f.cloth), f.initial, f.params);
         with.step(1);
         without.step(1);
         EXPECT_NE(with.checksum(), without.checksum()) << name;
@@ -156,8 +162,9 @@ TEST_P(Determinism, ChecksumIndependentOfWorkerCount) {
         if (w == 1) continue;
         EXPECT_EQ(one, hang_checksum(w, 100, c.wind, c.integ, c.kernel)) << w << " workers";
     }
-    std::printf("[ checksum ] N=100 200 substeps %s%s %s: %016llx (1, 2, 3, 5, 8 workers)\n", integrator_name(c.integ),
-                c.wind ? " wind" : "", kernel_path_name(c.kernel), static_cast<unsigned long long>(one));
+    std::printf("[ checksum ] N=100 200 substeps %s%s %s: %016llx (1, 2, 3, 5, 8 workers)\n",
+                integrator_name(c.integ), c.wind ? " wind" : "", kernel_path_name(c.kernel),
+                static_cast<unsigned long long>(one));
 }
 
 INSTANTIATE_TEST_SUITE_P(Variants, Determinism,
@@ -173,7 +180,8 @@ INSTANTIATE_TEST_SUITE_P(Variants, Determinism,
 
 TEST(Determinism, OddSizeWithPartialBatch) {
     const std::uint64_t one = hang_checksum(1, 77, true, Integrator::symplectic_euler, KernelPath::grid);
-    for (int w : {2, 3, 5}) EXPECT_EQ(one, hang_checksum(w, 77, true, Integrator::symplectic_euler, KernelPath::grid));
+    for (int w : {2, 3, 5})
+        EXPECT_EQ(one, hang_checksum(w, 77, true, Integrator::symplectic_euler, KernelPath::grid));
 }
 
 TEST(Determinism, RunsAreRepeatable) {
@@ -186,8 +194,8 @@ TEST(Determinism, WindChangesTheResult) { // the wind cases above really differ 
               hang_checksum(2, 40, false, Integrator::symplectic_euler, KernelPath::grid, 100));
 }
 
-// The irregular stages (aero per triangle, seams in colour groups, strain limiting, collisions with the body) at a
-// larger T-shirt with aerodynamic wind, over more substeps.
+// The irregular stages (aero per triangle, seams in colour groups, strain limiting, collisions with the body)
+// at a larger T-shirt with aerodynamic wind, over more substeps.
 TEST(Determinism, GarmentStagesIndependentOfWorkerCount) {
     auto run = [](int workers) {
         Workers arena(workers);
@@ -203,7 +211,8 @@ TEST(Determinism, GarmentStagesIndependentOfWorkerCount) {
         });
     };
     const std::uint64_t one = run(1);
-    for (int w : {3, 8}) EXPECT_EQ(one, run(w)) << w << " workers";
+    for (int w : {3, 8})
+        EXPECT_EQ(one, run(w)) << w << " workers";
     std::printf("[ checksum ] tshirt (80 cells/m) + aero, 200 substeps: %016llx (1, 3, 8 workers)\n",
                 static_cast<unsigned long long>(one));
 }

@@ -1,7 +1,8 @@
-// Precision far from the origin: positions are stored as float32 relative to the cloth's centre (Cloth::origin, in
-// double), so a cloth 1000 m away behaves bitwise as the same cloth at the origin, colliders included, and the OBJ
-// export adds the origin back. Before, a 1 cm cloth at (1000, 1000, 1000) m ended with max strain 0.30 against 0.007
-// at the origin (float32 spacing at 1000 m is 61 um, 9 % of this cloth's 0.67 mm springs).
+// Precision far from the origin: positions are stored as float32 relative to the cloth's centre
+// (Cloth::origin, in double), so a cloth 1000 m away behaves bitwise as the same cloth at the origin,
+// colliders included, and the OBJ export adds the origin back. Before, a 1 cm cloth at (1000, 1000, 1000) m
+// ended with max strain 0.30 against 0.007 at the origin (float32 spacing at 1000 m is 61 um, 9 % of this
+// cloth's 0.67 mm springs).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -46,8 +47,9 @@ TEST(FarFromOrigin, SmallClothAt1000mBehavesAsAtTheOrigin) {
         // The shape relative to the centre: the same to 1 nm (in fact the same bits).
         double worst = 0.0;
         for (std::size_t i = 0; i < a.cloth().particle_count; ++i)
-            worst = std::max({worst, std::fabs(double(a.x()[i]) - b.x()[i]), std::fabs(double(a.y()[i]) - b.y()[i]),
-                              std::fabs(double(a.z()[i]) - b.z()[i])});
+            worst =
+                std::max({worst, std::fabs(double(a.x()[i]) - b.x()[i]),
+                          std::fabs(double(a.y()[i]) - b.y()[i]), std::fabs(double(a.z()[i]) - b.z()[i])});
         EXPECT_LT(worst, 1e-9) << integrator_name(integ);
         EXPECT_EQ(a.checksum(), b.checksum()) << integrator_name(integ);
     }
@@ -69,8 +71,8 @@ TEST(FarFromOrigin, AbsoluteFloatStorageWouldLoseIt) {
 }
 
 TEST(FarFromOrigin, CollidersFarAwayStillCollide) {
-    // The sphere scene moved by (1000, 1000, 1000) m (every coordinate exact in float32): the cloth drapes over
-    // the sphere exactly as at the origin.
+    // The sphere scene moved by (1000, 1000, 1000) m (every coordinate exact in float32): the cloth drapes
+    // over the sphere exactly as at the origin.
     SceneSpec far = load_scene("sphere");
     far.grid.n = 20;
     far.grid.centre = {1000.0f, 1000.0f, 1000.0f};
@@ -78,22 +80,45 @@ TEST(FarFromOrigin, CollidersFarAwayStillCollide) {
                              make_ground(999.0f, {0.005f, 0.6f})};
     SceneSpec near = far;
     near.grid.centre = {0.0f, 0.0f, 0.0f};
-    near.physics.colliders = {make_sphere({0.0f, -0.5f, 0.0f}, 0.3f, {0.005f, 0.4f}), make_ground(-1.0f, {0.005f, 0.6f})};
+    near.physics.colliders = {make_sphere({0.0f, -0.5f, 0.0f}, 0.3f, {0.005f, 0.4f}),
+                              make_ground(-1.0f, {0.005f, 0.6f})};
     const Simulation a = simulate(far, 1.0), b = simulate(near, 1.0);
     EXPECT_EQ(a.checksum(), b.checksum());
     EXPECT_NEAR(a.health().max_structural_strain, b.health().max_structural_strain, 1e-6f);
-    // It rests on the sphere: the middle particle sits on the sphere's top (relative y -0.5 + 0.3 + margin) and
-    // the cloth has not fallen to the ground (relative y -1).
+    // It rests on the sphere: the middle particle sits on the sphere's top (relative y -0.5 + 0.3 + margin)
+    // and the cloth has not fallen to the ground (relative y -1).
     const std::size_t mid = grid_index(20, 10, 10);
     EXPECT_NEAR(double(a.y()[mid]) + a.origin()[1], 999.805, 0.01);
     float lowest = INFINITY;
-    for (float y : a.y()) lowest = std::min(lowest, y);
+    for (float y : a.y())
+        lowest = std::min(lowest, y);
     EXPECT_GT(lowest, -0.99f);
     // Without the colliders it would have fallen through.
     SceneSpec free = far;
     free.physics.colliders.clear();
     const Simulation c = simulate(free, 1.0);
     EXPECT_LT(double(c.y()[mid]) + c.origin()[1], 996.0);
+}
+
+TEST(FarFromOrigin, OutlineClothFarAwayToo) {
+    // The bag (outline panels sewn, aero, strain limiting, a ground) at (1000, 1000, 1000) m and near the
+    // origin, the ground 1 m below the cloth's centre in both (every coordinate exact in float32): the same
+    // bits.
+    SceneSpec near = load_scene(std::string(DRAPE_SOURCE_DIR) + "/scenes/examples/bag.json");
+    ASSERT_EQ(near.physics.colliders.size(), 1u);
+    SceneSpec far = near;
+    near.outline.centre = {0.0f, 0.75f, 0.0f};
+    near.physics.colliders = {make_ground(-0.25f, {0.005f, 0.6f})};
+    far.outline.centre = {1000.0f, 1000.0f, 1000.0f};
+    far.physics.colliders = {make_ground(999.0f, {0.005f, 0.6f})};
+    BuiltScene a = build_scene(far), b = build_scene(near);
+    Simulation sa(std::move(a.cloth), a.initial, a.params), sb(std::move(b.cloth), b.initial, b.params);
+    const std::uint64_t start = sa.checksum();
+    sa.step(300);
+    sb.step(300);
+    EXPECT_EQ(sa.origin(), (std::array<double, 3>{1000.0, 1000.0, 1000.0}));
+    EXPECT_EQ(sa.checksum(), sb.checksum());
+    EXPECT_NE(sa.checksum(), start) << "300 substeps moved the bag";
 }
 
 TEST(FarFromOrigin, ObjExportAddsTheOriginBackInDouble) {
@@ -120,15 +145,16 @@ TEST(FarFromOrigin, ObjExportAddsTheOriginBackInDouble) {
 }
 
 TEST(FarFromOrigin, WindFieldKeepsItsWorldPhase) {
-    // Seed 000's wind depends on the world z (sin(z + 10 t)): a cloth centred at z = 0.5 m (its frame) moves as the
-    // same cloth stored in world coordinates (origin 0), to float rounding (which grows over 2,000 substeps of a
-    // swinging cloth: ~0.1 mm of its 0.77 m motion).
+    // Seed 000's wind depends on the world z (sin(z + 10 t)): a cloth centred at z = 0.5 m (its frame) moves
+    // as the same cloth stored in world coordinates (origin 0), to float rounding (which grows over 2,000
+    // substeps of a swinging cloth: ~0.1 mm of its 0.77 m motion).
     SceneSpec spec = load_scene("hang");
     spec.grid.n = 16;
     spec.grid.centre = {0.0f, 0.0f, 0.5f};
     spec.physics.wind = {true, 20.0f};
     BuiltScene framed = build_scene(spec), world = build_scene(spec);
-    for (float& z : world.initial.z) z += 0.5f;
+    for (float& z : world.initial.z)
+        z += 0.5f;
     world.cloth.origin = {0.0, 0.0, 0.0};
     Simulation a(std::move(framed.cloth), framed.initial, framed.params);
     Simulation b(std::move(world.cloth), world.initial, world.params);
@@ -150,7 +176,8 @@ TEST(FarFromOrigin, WindFieldKeepsItsWorldPhase) {
     double apart = 0.0;
     for (std::size_t i = 0; i < c.cloth().particle_count; ++i)
         apart = std::max(apart, std::fabs(double(a.z()[i]) - double(c.z()[i])));
-    std::printf("wind phase: framed vs world %.3g m, moved %.3g m, phase ignored %.3g m\n", worst, moved, apart);
+    std::printf("wind phase: framed vs world %.3g m, moved %.3g m, phase ignored %.3g m\n", worst, moved,
+                apart);
     EXPECT_GT(apart, 30 * worst);
 }
 
@@ -162,7 +189,8 @@ TEST(FarFromOrigin, ScenesAreBuiltInTheClothsFrame) {
     EXPECT_EQ(b.cloth.origin[1], double(s.grid.centre[1]));
     EXPECT_FLOAT_EQ(b.params.colliders[0].centre[1], float(0.0 - double(s.grid.centre[1])));
     float mean_y = 0.0f;
-    for (float y : b.initial.y) mean_y += y;
+    for (float y : b.initial.y)
+        mean_y += y;
     EXPECT_EQ(mean_y, 0.0f) << "a flat cloth at its own centre";
 }
 

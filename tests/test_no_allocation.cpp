@@ -6,7 +6,6 @@
 #include <cstdlib>
 #include <new>
 
-
 #include "drape/workers.hpp"
 #include "test_helpers.hpp"
 

@@ -10,7 +10,6 @@
 #include <random>
 #include <vector>
 
-
 #include "drape/errors.hpp"
 #include "drape/publish.hpp"
 #include "drape/scene_hang.hpp"

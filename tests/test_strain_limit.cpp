@@ -3,7 +3,6 @@
 
 #include <set>
 
-
 #include "drape/workers.hpp"
 #include "test_helpers.hpp"
 
@@ -99,7 +98,8 @@ TEST(StrainLimit, ThreadCountIndependentAndEqualToSerialTwin) {
         });
     };
     const std::uint64_t one = run(1, false);
-    for (int t : {2, 3, 5, 8}) EXPECT_EQ(one, run(t, false)) << t << " workers";
+    for (int t : {2, 3, 5, 8})
+        EXPECT_EQ(one, run(t, false)) << t << " workers";
     EXPECT_EQ(one, run(2, true));
 }
 

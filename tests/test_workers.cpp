@@ -1,6 +1,7 @@
-// drape::Workers runs exactly the requested number of worker threads, also above the machine's core count: inside a
-// Workers(N) arena, N tasks that each wait (up to 5 s) for N distinct threads to arrive all see N distinct threads.
-// A task that blocks keeps its thread, so the N tasks can only all arrive on N different threads.
+// drape::Workers runs exactly the requested number of worker threads, also above the machine's core count:
+// inside a Workers(N) arena, N tasks that each wait (up to 5 s) for N distinct threads to arrive all see N
+// distinct threads. A task that blocks keeps its thread, so the N tasks can only all arrive on N different
+// threads.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -20,9 +21,10 @@ using namespace drape;
 
 namespace {
 
-/// Distinct threads that ran one of `count` tasks inside `workers`, each task waiting until `count` distinct threads
-/// have arrived or `wait` has passed.
-std::size_t threads_seen(Workers& workers, int count, std::chrono::milliseconds wait = std::chrono::seconds(5)) {
+/// Distinct threads that ran one of `count` tasks inside `workers`, each task waiting until `count` distinct
+/// threads have arrived or `wait` has passed.
+std::size_t threads_seen(Workers& workers, int count,
+                         std::chrono::milliseconds wait = std::chrono::seconds(5)) {
     std::mutex m;
     std::condition_variable cv;
     std::set<std::thread::id> ids;
@@ -51,7 +53,8 @@ TEST(Workers, RunsExactlyTheRequestedThreadsAboveTheCoreCount) {
 }
 
 TEST(Workers, NeverRunsMoreThanRequested) {
-    // 3 workers, 6 blocking tasks: only 3 threads can ever be inside (every task waits the full second for a 6th).
+    // 3 workers, 6 blocking tasks: only 3 threads can ever be inside (every task waits the full second for a
+    // 6th).
     Workers w(3);
     EXPECT_EQ(threads_seen(w, 6, std::chrono::seconds(1)), 3u);
 }

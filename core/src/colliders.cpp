@@ -395,7 +395,8 @@ Collider translated(const Collider& collider, const std::array<double, 3>& offse
     Collider c = collider;
     for (int k = 0; k < 3; ++k) {
         c.centre[k] = static_cast<float>(double(collider.centre[k]) + offset[k]);
-        if (c.kind == ColliderKind::capsule) c.axis[k] = static_cast<float>(double(collider.axis[k]) + offset[k]);
+        if (c.kind == ColliderKind::capsule)
+            c.axis[k] = static_cast<float>(double(collider.axis[k]) + offset[k]);
     }
     return c;
 }

@@ -432,7 +432,8 @@ BuiltScene build_scene(const SceneSpec& s) {
     }
     // The colliders into the cloth's frame (positions relative to Cloth::origin, the cloth's centre).
     const std::array<double, 3>& origin = out.cloth.origin;
-    for (Collider& c : out.params.colliders) c = translated(c, {-origin[0], -origin[1], -origin[2]});
+    for (Collider& c : out.params.colliders)
+        c = translated(c, {-origin[0], -origin[1], -origin[2]});
     out.params.dt = s.dt ? *s.dt : static_cast<float>(default_dt(out.cloth, out.params.air_drag));
     return out;
 }

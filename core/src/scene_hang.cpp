@@ -32,8 +32,9 @@ SceneBuild build_hang_scene(const HangParams& p) {
     const float h = p.size / static_cast<float>(n - 1);
     const float mass = p.total_mass / static_cast<float>(count);
 
-    // Particles: column i along x; row j along +z (horizontal) or down -y (vertical); centred on params.centre,
-    // which is the frame's origin (Cloth::origin): the stored positions are relative to it, exact at any centre.
+    // Particles: column i along x; row j along +z (horizontal) or down -y (vertical); centred on
+    // params.centre, which is the frame's origin (Cloth::origin): the stored positions are relative to it,
+    // exact at any centre.
     SceneBuild out;
     InitialState& s = out.initial;
     s.x.resize(count);
