@@ -83,7 +83,7 @@ struct Cloth {
 
 /// Initial per-particle state (cold, plain vectors of particle_count entries).
 struct InitialState {
-    std::vector<float> x, y, z;    ///< positions, m
+    std::vector<float> x, y, z;    ///< positions relative to Cloth::origin, m
     std::vector<float> vx, vy, vz; ///< velocities, m/s
 };
 

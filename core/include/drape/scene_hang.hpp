@@ -35,8 +35,8 @@ struct HangParams {
     float damping_ratio = 0.05f;
     GridPins pins = GridPins::corners;
     GridPlane plane = GridPlane::horizontal;
-    std::array<float, 3> centre{0.0f, 0.0f,
-                                0.0f}; ///< m, centre of the cloth: the frame's origin (Cloth::origin)
+    /// m, centre of the cloth: the frame's origin (Cloth::origin), positions are stored relative to it
+    std::array<float, 3> centre{0.0f, 0.0f, 0.0f};
 };
 
 inline constexpr std::uint32_t hang_min_n = 2;
