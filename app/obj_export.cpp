@@ -1,5 +1,6 @@
 #include "obj_export.hpp"
 
+#include <array>
 #include <cstdio>
 #include <filesystem>
 
@@ -27,7 +28,16 @@ std::string ObjExporter::write(const Simulation& sim, std::size_t index) {
     const float* p = planes_.data();
     std::fprintf(f, "# drape frame %zu, t = %.6f s, %zu vertices, %zu triangles\n", index, sim.time(), n,
                  triangles_.size() / 3);
-    for (std::size_t i = 0; i < n; ++i) std::fprintf(f, "v %.6g %.6g %.6g\n", p[i], p[stride + i], p[2 * stride + i]);
+    // World positions: the simulation's origin added back in double, with digits enough for the float32
+    // relative position when the origin is away from zero (1000 m + 1 nm).
+    const std::array<double, 3>& o = sim.origin();
+    const bool shifted = o[0] != 0.0 || o[1] != 0.0 || o[2] != 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+        if (shifted)
+            std::fprintf(f, "v %.12g %.12g %.12g\n", o[0] + double(p[i]), o[1] + double(p[stride + i]),
+                         o[2] + double(p[2 * stride + i]));
+        else
+            std::fprintf(f, "v %.6g %.6g %.6g\n", p[i], p[stride + i], p[2 * stride + i]);
     for (std::size_t i = 0; i < n; ++i)
         std::fprintf(f, "vn %.5g %.5g %.5g\n", p[3 * stride + i], p[4 * stride + i], p[5 * stride + i]);
     for (std::size_t t = 0; t + 2 < triangles_.size(); t += 3) {

@@ -5,18 +5,18 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <thread>
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
-#include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include "drape/scene.hpp"
 #include "obj_export.hpp"
 #include "drape/simulation.hpp"
 #include "drape/stability.hpp"
+#include "drape/workers.hpp"
 
 namespace drape::app {
 
@@ -60,9 +60,10 @@ class Progress {
 } // namespace
 
 int run_command(const RunOptions& o) {
-    const int hardware = tbb::info::default_concurrency();
-    const int threads = o.threads > 0 ? o.threads : hardware;
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    // Exactly this many worker threads build and step the cloth (also above the core count): a task_arena.
+    Workers workers(o.threads);
+    const int hardware = Workers::hardware();
+    const int threads = workers.workers();
 
     // The scene, with the flags the user gave overriding its values.
     SceneSpec spec;
@@ -104,7 +105,7 @@ int run_command(const RunOptions& o) {
     if (expected > (std::size_t{1} << 24))
         throw InvalidInput("--size: the cloth would have " + std::to_string(expected) + " particles (at most 16,777,216)");
 
-    BuiltScene scene = build_scene(spec);
+    BuiltScene scene = workers.run([&] { return build_scene(spec); });
     SimulationParams sp = scene.params;
     const StabilityBound bound = stability_bound(scene.cloth, sp.air_drag);
     const bool dt_default = !spec.dt.has_value();
@@ -116,13 +117,15 @@ int run_command(const RunOptions& o) {
         throw InvalidInput("--sim-seconds " + std::to_string(*o.sim_seconds) + " at dt = " + std::to_string(sp.dt) +
                            " s needs " + std::to_string(steps) + " substeps (max 1e9)");
 
-    Simulation sim(std::move(scene.cloth), scene.initial, sp);
+    std::optional<Simulation> built;
+    workers.run([&] { built.emplace(std::move(scene.cloth), scene.initial, sp); });
+    Simulation& sim = *built;
     const std::size_t particles = sim.cloth().particle_count;
     std::unique_ptr<ObjExporter> exporter;
     std::size_t frames_written = 0;
     if (o.export_obj) {
         exporter = std::make_unique<ObjExporter>(sim.cloth(), *o.export_obj);
-        exporter->write(sim, frames_written++);
+        workers.run([&] { exporter->write(sim, frames_written++); });
     }
 
     std::string error;
@@ -132,18 +135,20 @@ int run_command(const RunOptions& o) {
         // Chunks of ~1e7 particle-substeps keep progress reports cheap and responsive.
         const std::uint64_t chunk =
             exporter ? o.export_every : std::max<std::uint64_t>(1, 10'000'000 / particles);
-        for (std::uint64_t done = 0; done < steps;) {
-            const std::uint64_t n = std::min(chunk, steps - done);
-            sim.step(n);
-            done += n;
-            progress.update(done);
-            if (exporter && (done % o.export_every == 0 || done == steps)) exporter->write(sim, frames_written++);
-        }
+        workers.run([&] {
+            for (std::uint64_t done = 0; done < steps;) {
+                const std::uint64_t n = std::min(chunk, steps - done);
+                sim.step(n);
+                done += n;
+                progress.update(done);
+                if (exporter && (done % o.export_every == 0 || done == steps)) exporter->write(sim, frames_written++);
+            }
+        });
     } catch (const SimulationError& e) {
         error = e.what();
     }
     const double wall = std::chrono::duration<double>(clock_type::now() - start).count();
-    const Health health = sim.health();
+    const Health health = workers.run([&] { return sim.health(); });
     const std::uint64_t done = sim.steps_done();
     const double rate = wall > 0.0 ? double(particles) * double(done) / wall : 0.0;
 
@@ -182,6 +187,7 @@ int run_command(const RunOptions& o) {
     j["kinetic_energy"] = health.kinetic_energy;
     j["finite"] = health.finite && error.empty();
     j["checksum"] = hex64(sim.checksum());
+    j["origin"] = sim.origin(); // m: positions are stored relative to it (the cloth's centre)
     if (!error.empty()) j["error"] = error;
 
     if (o.json) {

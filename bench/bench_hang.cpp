@@ -7,12 +7,11 @@
 #include <string>
 
 #include <benchmark/benchmark.h>
-#include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include "drape/scene_hang.hpp"
 #include "drape/simulation.hpp"
 #include "drape/stability.hpp"
+#include "drape/workers.hpp"
 
 namespace {
 
@@ -37,6 +36,17 @@ Simulation& simulation(std::uint32_t n, KernelPath kernel, bool fused) {
     return *slot;
 }
 
+/// A task arena of exactly `threads` workers (also above the core count), one per count, kept for the whole
+/// run.
+Workers& workers(std::int64_t threads) {
+    static std::map<std::int64_t, std::unique_ptr<Workers>> cache;
+    static std::mutex mutex;
+    std::lock_guard lock(mutex);
+    auto& slot = cache[threads];
+    if (!slot) slot = std::make_unique<Workers>(static_cast<int>(threads));
+    return *slot;
+}
+
 /// Substeps per benchmark iteration: ~2e6 particle-substeps, so one iteration is a few milliseconds at any N.
 std::size_t substeps_per_iteration(std::size_t particles) { return std::max<std::size_t>(1, 2'000'000 / particles); }
 
@@ -54,14 +64,16 @@ void set_labels(benchmark::State& state, const Simulation& sim, std::size_t subs
 /// Full substep (BENCH.md figure 1). Args: N, threads.
 void run_substep(benchmark::State& state, KernelPath kernel, bool fused) {
     const auto n = static_cast<std::uint32_t>(state.range(0));
-    const auto threads = static_cast<std::size_t>(state.range(1));
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    Workers& w = workers(state.range(1));
     Simulation& sim = simulation(n, kernel, fused);
     const std::size_t k = substeps_per_iteration(sim.cloth().particle_count);
-    sim.step(k); // warm-up: caches, thread pool
-    for (auto _ : state) sim.step(k);
+    w.run([&] {
+        sim.step(k); // warm-up: caches, thread pool
+        for (auto _ : state)
+            sim.step(k);
+    });
     set_labels(state, sim, k);
-    state.counters["threads"] = double(threads);
+    state.counters["threads"] = double(w.workers());
 }
 
 void BM_Substep(benchmark::State& state) { run_substep(state, KernelPath::grid, true); }
@@ -72,14 +84,16 @@ void BM_SubstepStaged(benchmark::State& state) { run_substep(state, KernelPath::
 void BM_Stage(benchmark::State& state) {
     const auto stage = static_cast<Stage>(state.range(0));
     const auto n = static_cast<std::uint32_t>(state.range(1));
-    const auto threads = static_cast<std::size_t>(state.range(2));
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    Workers& w = workers(state.range(2));
     Simulation& sim = simulation(n, KernelPath::grid, false);
-    sim.run_stage(stage);
-    for (auto _ : state) sim.run_stage(stage);
+    w.run([&] {
+        sim.run_stage(stage);
+        for (auto _ : state)
+            sim.run_stage(stage);
+    });
     state.counters["particle_substeps_per_second"] =
         benchmark::Counter(double(sim.cloth().particle_count) * double(state.iterations()), benchmark::Counter::kIsRate);
-    state.counters["threads"] = double(threads);
+    state.counters["threads"] = double(w.workers());
     state.SetLabel(stage_name(stage));
 }
 
@@ -87,8 +101,7 @@ void BM_Stage(benchmark::State& state) {
 /// per limited spring. Args: N, threads.
 void BM_StrainLimit(benchmark::State& state) {
     const auto n = static_cast<std::uint32_t>(state.range(0));
-    const auto threads = static_cast<std::size_t>(state.range(1));
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    Workers& w = workers(state.range(1));
     static std::map<std::uint32_t, std::unique_ptr<Simulation>> cache;
     auto& slot = cache[n];
     if (!slot) {
@@ -100,22 +113,25 @@ void BM_StrainLimit(benchmark::State& state) {
         sp.dt = static_cast<float>(default_dt(scene.cloth, sp.air_drag));
         sp.strain_limit = {0.1f, 1, 1};
         slot = std::make_unique<Simulation>(std::move(scene.cloth), scene.initial, sp);
-        slot->step(2000); // hanging and stretched
+        w.run([&] { slot->step(2000); }); // hanging and stretched
     }
     Simulation& sim = *slot;
-    for (auto _ : state) sim.run_stage(Stage::strain_limit);
+    w.run([&] {
+        for (auto _ : state)
+            sim.run_stage(Stage::strain_limit);
+    });
     const double springs = double(sim.strain_limit_groups().edge_index.size());
     state.counters["springs_per_second"] =
         benchmark::Counter(springs * double(state.iterations()), benchmark::Counter::kIsRate);
     state.counters["particle_substeps_per_second"] =
         benchmark::Counter(double(sim.cloth().particle_count) * double(state.iterations()), benchmark::Counter::kIsRate);
     state.counters["groups"] = double(sim.strain_limit_groups().group_count());
-    state.counters["threads"] = double(threads);
+    state.counters["threads"] = double(w.workers());
     state.SetLabel("strain_limit pass");
 }
 
 void thread_args(benchmark::internal::Benchmark* b, std::initializer_list<std::int64_t> sizes) {
-    const int hardware = tbb::info::default_concurrency();
+    const int hardware = Workers::hardware();
     for (std::int64_t n : sizes) {
         b->Args({n, 1});
         for (int t = 2; t <= hardware; ++t) b->Args({n, t});
@@ -152,7 +168,7 @@ BENCHMARK(BM_Stage)
     ->ArgNames({"stage", "N", "threads"})
     ->Apply([](auto* b) {
         // The stages "hang" runs (the others are measured on scenes that use them: BM_StrainLimit, bench/garments.py).
-        const int hardware = tbb::info::default_concurrency();
+        const int hardware = Workers::hardware();
         for (Stage s : {Stage::external_forces, Stage::spring_forces, Stage::integrate})
             for (std::int64_t n : {316, 1000})
                 for (int t : {1, hardware}) b->Args({static_cast<int>(s), n, t});

@@ -121,6 +121,18 @@ assert j["finite"] is True and len(j["checksum"]) == 16, j
 print("ok: --json ->", {k: j[k] for k in ("particles", "springs", "substeps", "checksum")})
 PY
 
+# --threads runs that many workers (also above the core count) and the JSON reports them; same checksum as 1.
+"$DRAPE" run --size 40 --steps 50 --threads 8 --json >"$out" 2>"$err" || { echo "FAIL: --threads 8"; fail=1; }
+"$DRAPE" run --size 40 --steps 50 --threads 1 --json >"$out.1" 2>"$err" || { echo "FAIL: --threads 1"; fail=1; }
+python3 - "$out" "$out.1" <<'PY' || fail=1
+import json, sys
+j, one = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
+assert j["threads"] == 8 and one["threads"] == 1 and j["hardware_threads"] >= 1, (j, one)
+assert j["checksum"] == one["checksum"], (j["checksum"], one["checksum"])
+print("ok: --threads 8 ->", j["threads"], "workers on", j["hardware_threads"], "hardware threads, checksum", j["checksum"])
+PY
+rm -f "$out.1"
+
 # --sim-seconds converts to substeps of the default dt.
 "$DRAPE" run --size 20 --sim-seconds 0.05 --json >"$out" 2>"$err" || { echo "FAIL: --sim-seconds"; fail=1; }
 python3 -c "import json,sys; j=json.load(open('$out')); assert abs(j['sim_seconds']-0.05) < j['dt']+1e-9, j; print('ok: --sim-seconds ->', j['substeps'], 'substeps')" || fail=1

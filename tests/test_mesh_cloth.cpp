@@ -129,13 +129,17 @@ TEST(MeshCloth, DiscSceneMatchesItsObjFile) {
     EXPECT_EQ(bend, interior) << "one bend spring across each interior edge";
     EXPECT_EQ(other, 0u) << "no shear or seam springs on a mesh";
 
-    // Placed: the bounding-box centre at cloth.centre.
+    // Placed: the bounding-box centre at cloth.centre, which is the cloth's origin (positions are stored relative
+    // to it).
     float lo[3] = {1e9f, 1e9f, 1e9f}, hi[3] = {-1e9f, -1e9f, -1e9f};
     for (std::size_t i = 0; i < b.cloth.particle_count; ++i) {
         const float p[3] = {b.initial.x[i], b.initial.y[i], b.initial.z[i]};
         for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
     }
-    for (int k = 0; k < 3; ++k) EXPECT_NEAR(0.5 * (lo[k] + hi[k]), spec.mesh.centre[k], 1e-6) << k;
+    for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(b.cloth.origin[k], double(spec.mesh.centre[k])) << k;
+        EXPECT_NEAR(b.cloth.origin[k] + 0.5 * (lo[k] + hi[k]), spec.mesh.centre[k], 1e-6) << k;
+    }
 }
 
 TEST(MeshCloth, DiscDropsOntoTheSphereAndStaysHealthy) {
@@ -154,9 +158,9 @@ TEST(MeshCloth, DiscDropsOntoTheSphereAndStaysHealthy) {
         EXPECT_FALSE(is_inside(sphere, {sim.x()[i], sim.y()[i], sim.z()[i]}, 1e-4f)) << i;
         lowest = std::min(lowest, sim.y()[i]);
     }
-    centre_y = sim.y()[0]; // OBJ vertex 0 is the disc's centre
+    centre_y = float(sim.origin()[1] + sim.y()[0]); // OBJ vertex 0 is the disc's centre (world y)
     EXPECT_NEAR(centre_y, 0.205f, 0.01f);
-    EXPECT_LT(lowest, 0.1f) << "the rim drapes down";
+    EXPECT_LT(sim.origin()[1] + lowest, 0.1) << "the rim drapes down (world y)";
 }
 
 TEST(MeshCloth, QuadsAreTriangulatedAndTopPinsHold) {
@@ -182,9 +186,10 @@ TEST(MeshCloth, QuadsAreTriangulatedAndTopPinsHold) {
     Simulation sim(std::move(b.cloth), b.initial, b.params);
     sim.step(5000);
     EXPECT_TRUE(sim.health().finite);
-    EXPECT_FLOAT_EQ(sim.y()[0], 1.2f) << "pinned top row stays (centre 1 + half height 0.2)";
-    EXPECT_LT(sim.y()[24], 0.8f) << "the rest hangs, stretched a little";
-    EXPECT_GT(sim.y()[24], 0.7f);
+    const float oy = float(sim.origin()[1]);
+    EXPECT_FLOAT_EQ(oy + sim.y()[0], 1.2f) << "pinned top row stays (centre 1 + half height 0.2)";
+    EXPECT_LT(oy + sim.y()[24], 0.8f) << "the rest hangs, stretched a little";
+    EXPECT_GT(oy + sim.y()[24], 0.7f);
 }
 
 TEST(MeshCloth, PinListWeldsDegenerateAndNonManifold) {
@@ -296,10 +301,11 @@ TEST(MeshCloth, ScaleAndCentreAndSaveReload) {
         write_file("scaled.json", mesh_scene("tri2.obj", R"(, "scale": 0.5, "centre": [1, 2, 3], "pins": [0])"));
     const SceneSpec spec = load_scene(scene);
     const BuiltScene b = build_scene(spec);
-    EXPECT_FLOAT_EQ(b.initial.x[0], 0.5f);
-    EXPECT_FLOAT_EQ(b.initial.y[0], 1.5f);
-    EXPECT_FLOAT_EQ(b.initial.z[0], 3.0f);
-    EXPECT_FLOAT_EQ(b.initial.x[1], 1.5f);
+    const auto& o = b.cloth.origin; // world = origin + stored
+    EXPECT_FLOAT_EQ(float(o[0] + b.initial.x[0]), 0.5f);
+    EXPECT_FLOAT_EQ(float(o[1] + b.initial.y[0]), 1.5f);
+    EXPECT_FLOAT_EQ(float(o[2] + b.initial.z[0]), 3.0f);
+    EXPECT_FLOAT_EQ(float(o[0] + b.initial.x[1]), 1.5f);
     double mass = 0.0;
     for (std::size_t i = 1; i < 3; ++i) mass += 1.0 / b.cloth.inv_mass[i];
     EXPECT_NEAR(mass, 0.2 * 0.5 * 2.0 / 3.0, 1e-7) << "density 0.2 x area 0.5 (scaled), 2 of 3 vertices free";

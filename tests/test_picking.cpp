@@ -8,10 +8,10 @@
 #include <vector>
 
 #include <Eigen/Dense>
-#include <tbb/global_control.h>
 
 #include "drape/errors.hpp"
 #include "drape/picking.hpp"
+#include "drape/workers.hpp"
 
 using namespace drape;
 
@@ -111,14 +111,14 @@ TEST(Picking, TiesGoToTheLowerIndexAndResultIsThreadIndependent) {
     const Ray r = ray({0, 0, 0}, {0, 0, -1});
     PickHit one;
     {
-        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-        one = pick_particle(r, p.x, p.y, p.z, 0.01f);
+        Workers workers(1);
+        one = workers.run([&] { return pick_particle(r, p.x, p.y, p.z, 0.01f); });
     }
     ASSERT_TRUE(one.hit());
     EXPECT_EQ(one.index, 70000u);
-    for (std::size_t t : {2u, 3u}) {
-        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, t);
-        const PickHit h = pick_particle(r, p.x, p.y, p.z, 0.01f);
+    for (int t : {2, 3, 5, 8}) {
+        Workers workers(t);
+        const PickHit h = workers.run([&] { return pick_particle(r, p.x, p.y, p.z, 0.01f); });
         EXPECT_EQ(h.index, one.index);
         EXPECT_EQ(h.distance, one.distance);
     }

@@ -10,12 +10,11 @@
 #include <random>
 #include <vector>
 
-#include <tbb/global_control.h>
-
 #include "drape/errors.hpp"
 #include "drape/publish.hpp"
 #include "drape/scene_hang.hpp"
 #include "drape/simulation.hpp"
+#include "drape/workers.hpp"
 #include "test_helpers.hpp"
 
 using namespace drape;
@@ -197,10 +196,10 @@ TEST(Publish, ParallelEqualsSerialBitwiseAtAnyThreadCount) {
         const auto& s = scene.initial;
         std::vector<float> serial(pub.output_floats());
         const PublishStats ss = pub.publish_serial(s.x, s.y, s.z, serial);
-        for (std::size_t threads : {1u, 2u, 3u}) {
-            tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+        for (int threads : {1, 2, 3, 5, 8}) {
+            Workers workers(threads);
             std::vector<float> par(pub.output_floats(), 1.0f);
-            const PublishStats sp = pub.publish(s.x, s.y, s.z, par);
+            const PublishStats sp = workers.run([&] { return pub.publish(s.x, s.y, s.z, par); });
             EXPECT_EQ(0, std::memcmp(par.data(), serial.data(), par.size() * sizeof(float)))
                 << threads << " threads, " << (pub.grid_path() ? "grid" : "general") << " path";
             EXPECT_EQ(sp.max_structural_strain, ss.max_structural_strain);

@@ -3,8 +3,7 @@
 
 #include <set>
 
-#include <tbb/global_control.h>
-
+#include "drape/workers.hpp"
 #include "test_helpers.hpp"
 
 using namespace drape;
@@ -90,15 +89,17 @@ TEST(StrainLimit, ColourGroupsShareNoParticleAndCoverEverySpringOnce) {
 }
 
 TEST(StrainLimit, ThreadCountIndependentAndEqualToSerialTwin) {
-    auto run = [](std::size_t threads, bool serial) {
-        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-        Simulation sim = soft_hang(120, {0.05f, 3, 1}); // 14,400 particles: groups of several chunks
-        serial ? sim.step_serial(300) : sim.step(300);
-        return sim.checksum();
+    auto run = [](int threads, bool serial) {
+        Workers workers(threads);
+        return workers.run([&] {
+            Simulation sim = soft_hang(120, {0.05f, 3, 1}); // 14,400 particles: groups of several chunks
+            serial ? sim.step_serial(300) : sim.step(300);
+            return sim.checksum();
+        });
     };
     const std::uint64_t one = run(1, false);
-    EXPECT_EQ(one, run(2, false));
-    EXPECT_EQ(one, run(3, false));
+    for (int t : {2, 3, 5, 8})
+        EXPECT_EQ(one, run(t, false)) << t << " workers";
     EXPECT_EQ(one, run(2, true));
 }
 

@@ -391,6 +391,16 @@ Collider make_ellipsoid(Vec3f centre, Vec3f semi_axes, ColliderSurface surface,
     return c;
 }
 
+Collider translated(const Collider& collider, const std::array<double, 3>& offset) {
+    Collider c = collider;
+    for (int k = 0; k < 3; ++k) {
+        c.centre[k] = static_cast<float>(double(collider.centre[k]) + offset[k]);
+        if (c.kind == ColliderKind::capsule)
+            c.axis[k] = static_cast<float>(double(collider.axis[k]) + offset[k]);
+    }
+    return c;
+}
+
 std::array<float, 9> rotation_about_axis(Vec3f axis, float angle) {
     const double len =
         std::sqrt(double{axis[0]} * axis[0] + double{axis[1]} * axis[1] + double{axis[2]} * axis[2]);

@@ -65,7 +65,7 @@ struct StepContext {
     float drag;    ///< 1/s
     float wind_x;  ///< strength * sin(10 t), m/s^2 (uniform in space)
     float wind_strength; ///< m/s^2
-    float wind_phase;    ///< 10 t, rad
+    float wind_phase;    ///< 10 t + Cloth::origin z (mod 2 pi), rad
 
     // Forces (N) per particle from the irregular stages (aero_forces, seam_forces); unused when neither runs.
     const float* __restrict extra_fx;

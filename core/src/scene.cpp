@@ -86,14 +86,15 @@ class ObjectReader {
         if (s.size() > 4096) fail(at(key), "is longer than 4096 characters");
         return s;
     }
-    std::array<float, 3> vec3(const std::string& key, double limit, const char* unit, std::array<float, 3> fallback) {
+    std::array<double, 3> vec3_double(const std::string& key, double limit, const char* unit,
+                                      std::array<double, 3> fallback) {
         seen_.insert(key);
         if (!j_.contains(key)) return fallback;
         const json& v = j_[key];
         if (!v.is_array() || v.size() != 3)
             fail(at(key), std::string("must be an array of 3 numbers in [-") + format_number(limit) + ", " +
                               format_number(limit) + "]" + unit);
-        std::array<float, 3> out{};
+        std::array<double, 3> out{};
         for (int k = 0; k < 3; ++k) {
             if (!v[k].is_number()) fail(at(key) + "[" + std::to_string(k) + "]", "must be a number");
             const double d = v[k].get<double>();
@@ -101,9 +102,13 @@ class ObjectReader {
                 fail(at(key) + "[" + std::to_string(k) + "]", "= " + format_number(d) + " is outside the allowed range [-" +
                                                                   format_number(limit) + ", " + format_number(limit) +
                                                                   "]" + unit);
-            out[k] = static_cast<float>(d);
+            out[k] = d;
         }
         return out;
+    }
+    std::array<float, 3> vec3(const std::string& key, double limit, const char* unit, std::array<float, 3> fallback) {
+        const std::array<double, 3> d = vec3_double(key, limit, unit, {fallback[0], fallback[1], fallback[2]});
+        return {static_cast<float>(d[0]), static_cast<float>(d[1]), static_cast<float>(d[2])};
     }
     /// A nested object (absent = empty object).
     ObjectReader object(const std::string& key) {
@@ -238,6 +243,7 @@ SceneState read_state(ObjectReader& st) {
             }
         }
     };
+    out.origin = st.vec3_double("origin", 1000.0, " m", {0.0, 0.0, 0.0});
     triples("positions", out.x, out.y, out.z, " m");
     triples("velocities", out.vx, out.vy, out.vz, " m/s");
     if (out.vx.size() != out.x.size())
@@ -484,9 +490,17 @@ void apply_state(const SceneState& st, BuiltScene& out) {
     if (c.free_inv_mass.size() != n) c.free_inv_mass.assign(c.inv_mass.begin(), c.inv_mass.begin() + n);
     for (std::size_t i = 0; i < n; ++i) c.inv_mass[i] = c.free_inv_mass[i];
     for (std::uint32_t i : st.pinned) c.inv_mass[i] = 0.0f;
+    // Positions into the cloth's frame: exact when the state was saved from the same frame (the usual case).
+    const std::array<double, 3> shift{st.origin[0] - c.origin[0], st.origin[1] - c.origin[1], st.origin[2] - c.origin[2]};
     out.initial.x = st.x;
     out.initial.y = st.y;
     out.initial.z = st.z;
+    if (shift != std::array<double, 3>{0.0, 0.0, 0.0})
+        for (std::size_t i = 0; i < n; ++i) {
+            out.initial.x[i] = static_cast<float>(double(st.x[i]) + shift[0]);
+            out.initial.y[i] = static_cast<float>(double(st.y[i]) + shift[1]);
+            out.initial.z[i] = static_cast<float>(double(st.z[i]) + shift[2]);
+        }
     out.initial.vx = st.vx;
     out.initial.vy = st.vy;
     out.initial.vz = st.vz;
@@ -517,8 +531,9 @@ BuiltScene build_scene(const SceneSpec& s) {
         const std::array<float, 3> normal = o.plane == GridPlane::horizontal ? std::array{0.0f, -1.0f, 0.0f}
                                                                            : std::array{0.0f, 0.0f, -1.0f};
         const float half_gap = o.copy ? 0.5f * o.gap : 0.0f;
+        // Positions relative to o.centre, the frame's origin (Cloth::origin, set below).
         for (int k = 0; k < 3; ++k)
-            frame.origin[k] = o.centre[k] - cu * frame.axis_u[k] - cv * frame.axis_v[k] - half_gap * normal[k];
+            frame.origin[k] = -cu * frame.axis_u[k] - cv * frame.axis_v[k] - half_gap * normal[k];
         OutlinePanelParams op;
         op.spacing = o.spacing;
         op.areal_density = o.density;
@@ -544,17 +559,20 @@ BuiltScene build_scene(const SceneSpec& s) {
                 if ((vertical ? a.y[i] : a.z[i]) >= top - 0.25f * o.spacing) inv_mass[i] = 0.0f;
         }
         cook_assembly(s, a, inv_mass, free_inv_mass, out);
+        out.cloth.origin = {double(o.centre[0]), double(o.centre[1]), double(o.centre[2])};
     } else if (s.cloth == ClothType::mesh) {
         const MeshClothSpec& m = s.mesh;
         if (!m.mesh) throw InvalidInput("mesh cloth: no mesh loaded (cloth.file)");
         GarmentAssembly a;
-        add_mesh_panel(a, *m.mesh, {m.scale, m.centre, m.density});
+        // Positions relative to m.centre, the cloth's origin (Cloth::origin, set below).
+        add_mesh_panel(a, *m.mesh, {m.scale, {0.0f, 0.0f, 0.0f}, m.density});
         std::vector<float> inv_mass = a.inverse_masses();
         const std::vector<float> free_inv_mass = inv_mass;
         if (m.pins == MeshPins::top)
             for (std::uint32_t i : mesh_top_particles(*m.mesh)) inv_mass[i] = 0.0f;
         for (std::uint32_t v : m.pin_vertices) inv_mass[static_cast<std::size_t>(m.mesh->particle_of_vertex.at(v))] = 0.0f;
         cook_assembly(s, a, inv_mass, free_inv_mass, out);
+        out.cloth.origin = {double(m.centre[0]), double(m.centre[1]), double(m.centre[2])};
     } else {
         const TShirtBuild t = build_tshirt(s.tshirt);
         const GarmentAssembly& a = t.assembly;
@@ -572,6 +590,10 @@ BuiltScene build_scene(const SceneSpec& s) {
         const std::vector<Collider> body = default_body();
         out.params.colliders.insert(out.params.colliders.end(), body.begin(), body.end());
     }
+    // The colliders into the cloth's frame (positions relative to Cloth::origin, the cloth's centre).
+    const std::array<double, 3>& origin = out.cloth.origin;
+    for (Collider& c : out.params.colliders)
+        c = translated(c, {-origin[0], -origin[1], -origin[2]});
     out.params.dt = s.dt ? *s.dt : static_cast<float>(default_dt(out.cloth, out.params.air_drag));
     if (s.state) apply_state(*s.state, out);
     return out;

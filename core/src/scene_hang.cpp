@@ -32,7 +32,9 @@ SceneBuild build_hang_scene(const HangParams& p) {
     const float h = p.size / static_cast<float>(n - 1);
     const float mass = p.total_mass / static_cast<float>(count);
 
-    // Particles: column i along x; row j along +z (horizontal) or down -y (vertical); centred on params.centre.
+    // Particles: column i along x; row j along +z (horizontal) or down -y (vertical); centred on
+    // params.centre, which is the frame's origin (Cloth::origin): the stored positions are relative to it,
+    // exact at any centre.
     SceneBuild out;
     InitialState& s = out.initial;
     s.x.resize(count);
@@ -49,13 +51,13 @@ SceneBuild build_hang_scene(const HangParams& p) {
         for (std::uint32_t i = 0; i < n; ++i) {
             const std::uint32_t k = grid_index(n, i, j);
             const float u = -0.5f * p.size + static_cast<float>(i) * h, v = -0.5f * p.size + static_cast<float>(j) * h;
-            s.x[k] = p.centre[0] + u;
+            s.x[k] = u;
             if (p.plane == GridPlane::horizontal) {
-                s.y[k] = p.centre[1];
-                s.z[k] = p.centre[2] + v;
+                s.y[k] = 0.0f;
+                s.z[k] = v;
             } else {
-                s.y[k] = p.centre[1] - v;
-                s.z[k] = p.centre[2];
+                s.y[k] = -v;
+                s.z[k] = 0.0f;
             }
         }
     if (p.pins == GridPins::corners) {
@@ -116,6 +118,7 @@ SceneBuild build_hang_scene(const HangParams& p) {
     out.cloth = cook_cloth(inv_mass, std::move(edges), material, halo);
     out.cloth.grid = std::move(g);
     out.cloth.free_inv_mass.assign(count, 1.0f / mass);
+    out.cloth.origin = {double(p.centre[0]), double(p.centre[1]), double(p.centre[2])};
     // Triangles: two per grid cell, counter-clockwise seen from +y (horizontal) or +z (vertical).
     auto& tri = out.cloth.triangles;
     tri.reserve(static_cast<std::size_t>(6) * (n - 1) * (n - 1));

@@ -167,7 +167,9 @@ std::string state_json(const SceneState& st) {
         if (v->size() != n)
             throw InvalidInput("scene state: " + std::to_string(n) + " x positions but an array of " +
                                std::to_string(v->size()) + " entries");
-    std::string out = "{\n    \"positions\": [";
+    char origin[128];
+    std::snprintf(origin, sizeof origin, "[%.17g, %.17g, %.17g]", st.origin[0], st.origin[1], st.origin[2]);
+    std::string out = "{\n    \"origin\": " + std::string(origin) + ",\n    \"positions\": [";
     out.reserve(n * 80 + 64);
     for (std::size_t i = 0; i < n; ++i)
         out += std::string(i ? "," : "") + "\n      [" + num(st.x[i]) + ", " + num(st.y[i]) + ", " + num(st.z[i]) + "]";
@@ -255,6 +257,7 @@ void save_scene(const std::string& path, const SceneSpec& spec, const SceneState
 
 SceneState capture_state(const Simulation& sim) {
     SceneState s;
+    s.origin = sim.origin();
     const std::size_t n = sim.cloth().particle_count;
     s.x.assign(sim.x().begin(), sim.x().end());
     s.y.assign(sim.y().begin(), sim.y().end());

@@ -108,7 +108,8 @@ kernels::StepContext Simulation::make_context(std::size_t step_index) {
     // Time at the start of this substep, from the step count (no drift from summing dt).
     const double t = static_cast<double>(step_index) * static_cast<double>(params_.dt);
     c.wind_strength = params_.wind.strength;
-    c.wind_phase = static_cast<float>(std::fmod(10.0 * t, 2.0 * M_PI));
+    // The field depends on the world z (sin(z + 10 t)): the frame's origin z joins the phase, in double.
+    c.wind_phase = static_cast<float>(std::fmod(10.0 * t + cl.origin[2], 2.0 * M_PI));
     c.wind_x = params_.wind.strength * static_cast<float>(std::sin(10.0 * t));
 
     if (cl.grid) {

@@ -70,6 +70,12 @@ struct Cloth {
     SeamSet seams;                   ///< seam springs, coloured
     std::optional<GridStencil> grid; ///< present when the cloth is a full or masked regular grid
     std::vector<std::uint32_t> triangles; ///< 3 indices per triangle, counter-clockwise seen from +normal
+    /// The simulation frame: every position of this cloth (InitialState, the Simulation's state, its
+    /// colliders and grab targets) is relative to this point, m, world coordinates in double. Scenes put it
+    /// at the cloth's centre, so float32 positions keep their precision wherever the cloth is (a 1 cm cloth
+    /// at 1000 m behaves as at the origin); world position = origin + stored position, added back (in double)
+    /// only where absolute positions are shown (OBJ export, the run's JSON).
+    std::array<double, 3> origin{0.0, 0.0, 0.0};
 
     std::size_t block_count() const noexcept { return (padded_count + block_particles - 1) / block_particles; }
     std::size_t spring_count() const noexcept { return edges.size(); }
@@ -77,7 +83,7 @@ struct Cloth {
 
 /// Initial per-particle state (cold, plain vectors of particle_count entries).
 struct InitialState {
-    std::vector<float> x, y, z;    ///< positions, m
+    std::vector<float> x, y, z;    ///< positions relative to Cloth::origin, m
     std::vector<float> vx, vy, vz; ///< velocities, m/s
 };
 

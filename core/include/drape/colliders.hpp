@@ -75,6 +75,10 @@ Collider make_ellipsoid(Vec3f centre, Vec3f semi_axes, ColliderSurface surface =
                         const std::array<float, 9>& rotation = {1, 0, 0, 0, 1, 0, 0, 0, 1});
 /// Row-major rotation by `angle` radians about the unit `axis` (normalised here).
 std::array<float, 9> rotation_about_axis(Vec3f axis, float angle);
+/// The collider moved by `offset` (m, added in double before rounding to float): the points of every kind
+/// (plane point, centres, both capsule ends) move, directions and sizes do not. Scenes move colliders into
+/// the cloth's frame with offset = -Cloth::origin.
+Collider translated(const Collider& collider, const std::array<double, 3>& offset);
 
 /// Checks every field of a collider (what the make_* functions check). Throws InvalidInput naming the field
 /// and the allowed range.

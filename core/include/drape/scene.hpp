@@ -52,6 +52,9 @@ struct MeshClothSpec {
 /// A simulation state saved with a scene (the "state" section): positions (m) and velocities (m/s) per particle, and
 /// the pinned particles. build_scene starts from it: its pins replace the scene's own.
 struct SceneState {
+    /// The frame the positions are stored in (Cloth::origin of the saved simulation), m: world position =
+    /// origin + (x, y, z). Kept separately so that a cloth far from 0 keeps its float precision in the file.
+    std::array<double, 3> origin{0.0, 0.0, 0.0};
     std::vector<float> x, y, z, vx, vy, vz;
     std::vector<std::uint32_t> pinned;
 };

@@ -35,7 +35,8 @@ struct HangParams {
     float damping_ratio = 0.05f;
     GridPins pins = GridPins::corners;
     GridPlane plane = GridPlane::horizontal;
-    std::array<float, 3> centre{0.0f, 0.0f, 0.0f}; ///< m, centre of the cloth
+    /// m, centre of the cloth: the frame's origin (Cloth::origin), positions are stored relative to it
+    std::array<float, 3> centre{0.0f, 0.0f, 0.0f};
 };
 
 inline constexpr std::uint32_t hang_min_n = 2;
@@ -46,7 +47,8 @@ struct SceneBuild {
     InitialState initial;
 };
 
-/// Builds the hang scene: cooked cloth with the grid stencil, and its initial state. Throws InvalidInput.
+/// Builds the hang scene: cooked cloth with the grid stencil, and its initial state, positions relative to
+/// params.centre (= cloth.origin). Throws InvalidInput.
 SceneBuild build_hang_scene(const HangParams& params);
 
 /// Particle index of grid cell (column i, row j).

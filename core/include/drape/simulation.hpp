@@ -79,7 +79,8 @@ struct SimulationParams {
     KernelPath kernel = KernelPath::automatic;
     bool fused = true; ///< false runs each stage as its own pass (reference / per-stage profiling)
     StrainLimit strain_limit;
-    std::vector<Collider> colliders; ///< analytic colliders, applied in order after strain limiting
+    /// Analytic colliders, positions relative to Cloth::origin; applied in order after strain limiting.
+    std::vector<Collider> colliders;
 };
 
 /// Hot state: one buffer of the double-buffered SoA arrays. u, v, w hold velocities (symplectic Euler) or the
@@ -105,9 +106,10 @@ class Simulation {
     /// parameter and the allowed range. Allocates all state and scratch here, never in step().
     Simulation(Cloth cloth, const InitialState& initial, const SimulationParams& params);
 
-    /// Advances `count` substeps of params().dt. Parallel over fixed particle blocks with oneTBB (the thread count is
-    /// the caller's: tbb::global_control). Throws SimulationError naming the step and the particle if any value
-    /// becomes non-finite; the state is then left at the last finite step.
+    /// Advances `count` substeps of params().dt. Parallel over fixed particle blocks with oneTBB (the thread
+    /// count is the caller's: call it inside drape::Workers::run, workers.hpp). Throws SimulationError naming
+    /// the step and the particle if any value becomes non-finite; the state is then left at the last finite
+    /// step.
     void step(std::size_t count = 1);
 
     /// Same as step() but runs every stage serially on the calling thread (the "serial twin" of the parallel path).
@@ -119,7 +121,10 @@ class Simulation {
     std::size_t steps_done() const noexcept { return steps_done_; }
     double time() const noexcept { return static_cast<double>(steps_done_) * params_.dt; }
 
-    /// Current positions (particle_count entries each).
+    /// The frame's origin (world coordinates, m): positions, colliders and grab targets are relative to it
+    /// (Cloth::origin).
+    const std::array<double, 3>& origin() const noexcept { return cloth_.origin; }
+    /// Current positions relative to origin(), m (particle_count entries each).
     std::span<const float> x() const noexcept { return {cur().x.data(), cloth_.particle_count}; }
     std::span<const float> y() const noexcept { return {cur().y.data(), cloth_.particle_count}; }
     std::span<const float> z() const noexcept { return {cur().z.data(), cloth_.particle_count}; }
@@ -146,9 +151,9 @@ class Simulation {
     /// mass: Cloth::free_inv_mass) particle i. Throws InvalidInput if i is out of range.
     void set_pinned(std::size_t i, bool pinned);
     bool is_pinned(std::size_t i) const noexcept { return cloth_.inv_mass[i] == 0.0f; }
-    /// Grabs particle i: it becomes kinematic and is moved to `target` (m) at the start of every step() call until
-    /// release_grab(). Grabbing another particle releases the previous one. A grabbed particle that was pinned
-    /// stays pinned when released.
+    /// Grabs particle i: it becomes kinematic and is moved to `target` (m, relative to origin()) at the start
+    /// of every step() call until release_grab(). Grabbing another particle releases the previous one. A
+    /// grabbed particle that was pinned stays pinned when released.
     void grab(std::size_t i, std::array<float, 3> target);
     void move_grab(std::array<float, 3> target) noexcept { grab_target_ = target; }
     void release_grab() noexcept;
