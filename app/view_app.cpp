@@ -500,7 +500,15 @@ void Viewer::draw_scene() {
 void Viewer::save_screenshot(const std::string& path) {
     int fw = 1, fh = 1;
     glfwGetFramebufferSize(window_, &fw, &fh);
-    render::save_screenshot_png(path, fw, fh);
+    try {
+        render::save_screenshot_png(path, fw, fh);
+    } catch (const std::runtime_error& e) {
+        // Not fatal in the window (a message); the exit code says so (exit_code::write_failed).
+        std::fprintf(stderr, "drape view: %s\n", e.what());
+        session_->post(MessageLevel::error, e.what());
+        write_failed_ = true;
+        return;
+    }
     std::fprintf(stderr, "drape view: saved %s (%d x %d)\n", path.c_str(), fw, fh);
 }
 
@@ -636,7 +644,8 @@ int Viewer::run() {
         save_screenshot(final_screenshot);
     }
     if (options_.stats_json) print_stats_json();
-    return had_error_ ? (failure_code_ ? failure_code_ : exit_code::non_finite) : exit_code::ok;
+    if (had_error_) return failure_code_ ? failure_code_ : exit_code::non_finite;
+    return write_failed_ ? exit_code::write_failed : exit_code::ok;
 }
 
 void Viewer::print_stats_json() const {
@@ -673,6 +682,7 @@ void Viewer::print_stats_json() const {
     j["stiffness"] = session_->fabric().stiffness;
     j["markers"] = session_->show_markers();
     j["undo_depth"] = session_->undo_depth();
+    j["generation"] = session_->generation(); // 1 + the rebuilds installed (resets included)
     j["sim_steps"] = s.steps_done();
     j["publish_path"] = session_->publisher().grid_path() ? "grid-simd" : "general";
     j["triangles_drawn"] = renderer_->triangle_count();

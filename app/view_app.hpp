@@ -151,7 +151,8 @@ class Viewer {
     std::size_t last_substeps_ = 0;
     PublishStats last_publish_;
     bool had_error_ = false;
-    int failure_code_ = 0;       ///< exit code of the last simulation failure (exit_code::non_finite / blow_up)
+    int failure_code_ = 0;
+    bool write_failed_ = false;  ///< a screenshot could not be written       ///< exit code of the last simulation failure (exit_code::non_finite / blow_up)
     std::string reported_error_; ///< the failure last printed on stderr
     std::string pending_screenshot_;
 };
