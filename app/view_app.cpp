@@ -543,6 +543,7 @@ int Viewer::run() {
         FrameTimes t;
         // 1. Simulate.
         auto t0 = clock_type::now();
+        const bool built_this_frame = session_->building();
         last_substeps_ = session_->advance();
         t.sim = ms_since(t0);
         if (!session_->error().empty()) {
@@ -602,6 +603,13 @@ int Viewer::run() {
         last_swap = now;
         last_ = t;
         if (samples_.size() < 1'000'000) samples_.push_back(t);
+        if (session_->building()) {
+            // Responsiveness while a cloth is built in the background.
+            ++building_frames_;
+            building_max_ms_ = std::max(building_max_ms_, t.frame);
+        } else if (built_this_frame) {
+            install_frame_ms_ = t.frame; // the frame that swapped the new cloth in (and simulated it once)
+        }
 
         // Overlay figures: averages over ~0.5 s.
         window_sum_.sim += t.sim;
@@ -683,6 +691,9 @@ void Viewer::print_stats_json() const {
     j["markers"] = session_->show_markers();
     j["undo_depth"] = session_->undo_depth();
     j["generation"] = session_->generation(); // 1 + the rebuilds installed (resets included)
+    j["building"] = {{"frames", building_frames_},
+                     {"max_frame_ms", building_max_ms_},
+                     {"install_frame_ms", install_frame_ms_}};
     j["sim_steps"] = s.steps_done();
     j["publish_path"] = session_->publisher().grid_path() ? "grid-simd" : "general";
     j["triangles_drawn"] = renderer_->triangle_count();

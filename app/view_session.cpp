@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <sstream>
 
@@ -343,7 +344,8 @@ void ViewSession::refresh_pins() {
 }
 
 std::size_t ViewSession::advance() {
-    poll();
+    // A new cloth is shown first as built: the frame that swaps it in (new GPU buffers) does not also simulate it.
+    if (poll()) return 0;
     if (!running_ && !step_pending_) return 0;
     // A node-mass rebuild continues the motion from when it was asked for: the old cloth holds still meanwhile.
     if (job_ && job_->request.keep) return 0;
