@@ -275,6 +275,10 @@ void Viewer::handle_input_events() {
             show_help_ = !show_help_;
             continue;
         }
+        if (e.code == GLFW_KEY_Q && (e.mods & GLFW_MOD_CONTROL)) {
+            glfwSetWindowShouldClose(window_, GLFW_TRUE); // Ctrl+Q quits from anywhere, a field too
+            continue;
+        }
         // A field being edited has the keyboard: Backspace there deletes a digit, never resets the cloth.
         if (ui_wants_keyboard()) continue;
         if (e.action == GLFW_REPEAT && e.code != GLFW_KEY_N) continue;
@@ -606,6 +610,7 @@ int Viewer::run() {
         if (session_->building()) {
             // Responsiveness while a cloth is built in the background.
             ++building_frames_;
+            building_ms_ += t.frame;
             building_max_ms_ = std::max(building_max_ms_, t.frame);
         } else if (built_this_frame) {
             install_frame_ms_ = t.frame; // the frame that swapped the new cloth in (and simulated it once)
@@ -692,6 +697,7 @@ void Viewer::print_stats_json() const {
     j["undo_depth"] = session_->undo_depth();
     j["generation"] = session_->generation(); // 1 + the rebuilds installed (resets included)
     j["building"] = {{"frames", building_frames_},
+                     {"seconds", building_ms_ * 1e-3},
                      {"max_frame_ms", building_max_ms_},
                      {"install_frame_ms", install_frame_ms_}};
     j["sim_steps"] = s.steps_done();

@@ -154,6 +154,7 @@ class Viewer {
     int failure_code_ = 0;
     bool write_failed_ = false;  ///< a screenshot could not be written
     std::uint64_t building_frames_ = 0; ///< frames drawn while a cloth was built in the background
+    double building_ms_ = 0.0;          ///< their total
     double building_max_ms_ = 0.0;      ///< the longest of them
     double install_frame_ms_ = 0.0;     ///< the frame that swapped the last one in       ///< exit code of the last simulation failure (exit_code::non_finite / blow_up)
     std::string reported_error_; ///< the failure last printed on stderr
