@@ -603,6 +603,10 @@ void ViewSession::set_scene(const std::string& name_or_path) {
     } catch (const InvalidInput& e) {
         post(MessageLevel::warning, std::string("refused: ") + e.what());
         return;
+    } catch (const std::exception& e) {
+        // Whatever the loader lets through (a bug there) must not take the window down: refused, scene kept.
+        post(MessageLevel::warning, "refused: " + name_or_path + ": " + e.what());
+        return;
     }
     std::optional<std::uint32_t> size;
     if (spec.cloth == ClothType::grid && spec.name == "hang") size = view_default_hang_size;

@@ -495,3 +495,50 @@ TEST(ViewSession, WorkersRunTheRequestedCount) {
     s.advance();
     EXPECT_TRUE(s.sim().health().finite);
 }
+
+TEST(ViewSession, OpensSceneFilesInTheBackgroundAndRefusesBadOnes) {
+    const std::string dir = ::testing::TempDir();
+    const std::string good = dir + "/drape_view_open.json", bad = dir + "/drape_view_bad.json",
+                      overflow = dir + "/drape_view_overflow.json";
+    {
+        FILE* f = std::fopen(good.c_str(), "w");
+        ASSERT_NE(f, nullptr);
+        std::fputs(R"({"scene": "opened", "cloth": {"type": "grid", "n": 12}})", f);
+        std::fclose(f);
+        f = std::fopen(bad.c_str(), "w");
+        ASSERT_NE(f, nullptr);
+        std::fputs(R"({"scene": "bad", "cloth": {"type": "grid", "n": 1}})", f);
+        std::fclose(f);
+        f = std::fopen(overflow.c_str(), "w");
+        ASSERT_NE(f, nullptr);
+        std::fputs(R"({"scene": "overflow", "cloth": {"type": "grid", "n": 1e400}})", f);
+        std::fclose(f);
+    }
+    ViewSession s(16, 1, std::nullopt);
+    const auto scene_gen = s.scene_generation();
+    s.set_scene(good);
+    EXPECT_TRUE(s.building());
+    EXPECT_EQ(s.sim().cloth().particle_count, 256u); // the old scene runs until the new one is in
+    s.wait();
+    EXPECT_EQ(s.scene().name, "opened");
+    EXPECT_EQ(s.sim().cloth().particle_count, 144u);
+    EXPECT_NE(s.scene_generation(), scene_gen);
+    s.set_scene(bad); // refused with the file's message; the opened scene stays
+    EXPECT_FALSE(s.building());
+    EXPECT_NE(s.message().text.find("refused"), std::string::npos) << s.message().text;
+    EXPECT_NE(s.message().text.find("drape_view_bad.json"), std::string::npos) << s.message().text;
+    EXPECT_EQ(s.scene().name, "opened");
+    s.set_scene(overflow); // never an exception out of the viewer
+    EXPECT_NE(s.message().text.find("refused"), std::string::npos) << s.message().text;
+    EXPECT_EQ(s.scene().name, "opened");
+    s.set_scene(dir + "/no_such_file.json");
+    EXPECT_NE(s.message().text.find("cannot open"), std::string::npos) << s.message().text;
+    EXPECT_EQ(s.sim().cloth().particle_count, 144u);
+    s.undo(); // back to the scene before the file
+    s.wait();
+    EXPECT_EQ(s.scene().name, "hang");
+    EXPECT_EQ(s.sim().cloth().particle_count, 256u);
+    std::remove(good.c_str());
+    std::remove(bad.c_str());
+    std::remove(overflow.c_str());
+}
