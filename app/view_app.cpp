@@ -275,6 +275,10 @@ void Viewer::handle_input_events() {
             show_help_ = !show_help_;
             continue;
         }
+        if (e.code == GLFW_KEY_F12 && e.action == GLFW_PRESS) {
+            handle_key(e.code, e.mods); // a screenshot, also of a dialog
+            continue;
+        }
         if (e.code == GLFW_KEY_Q && (e.mods & GLFW_MOD_CONTROL)) {
             glfwSetWindowShouldClose(window_, GLFW_TRUE); // Ctrl+Q quits from anywhere, a field too
             continue;

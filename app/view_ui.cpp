@@ -403,7 +403,8 @@ void Viewer::ui_build_progress() {
     const std::optional<BuildStatus> b = session_->build_status();
     if (!b) return;
     const ImGuiIO& io = ImGui::GetIO();
-    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x * 0.5f + (show_ui_ ? 170.0f : 0.0f), 60.0f), ImGuiCond_Always,
+    // Centred in the free area, below the stats overlay.
+    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x * 0.5f + (show_ui_ ? 170.0f : 0.0f), 170.0f), ImGuiCond_Always,
                             ImVec2(0.5f, 0.0f));
     ImGui::SetNextWindowBgAlpha(0.9f);
     ImGui::Begin("building", nullptr,
