@@ -1,7 +1,9 @@
 // The viewer: a GLFW window with an OpenGL 4.5 core context, the frame loop, mouse and keyboard, and the Dear
 // ImGui panels (view_ui.cpp). One frame:
 //
-//   poll input -> panels (changes apply now) -> simulate `substeps` substeps (oneTBB, all threads)
+//   poll input -> ImGui frame -> queued buttons and keys (routed with this frame's capture flags) -> panels
+//   (changes apply now; rebuilds start on a background thread) -> install a finished build, or simulate
+//   `substeps` substeps (inside the session's Workers arena)
 //   -> wait for the next ring region's fence -> output stage writes positions + normals into it (oneTBB +
 //   SIMD)
 //   -> draw background, ground, cloth, markers, panels -> fence the region -> swap

@@ -304,7 +304,6 @@ ViewSession::Built ViewSession::build(Snapshot t, const KeepState* keep_state, b
 }
 
 void ViewSession::install(Built built, const Request& r) {
-    const Snapshot before = snapshot();
     publisher_ = std::move(built.publisher);
     sim_ = std::move(built.sim);
     restore(built.snap);
@@ -332,7 +331,6 @@ void ViewSession::install(Built built, const Request& r) {
         break;
     }
     edit_open_ = false;
-    (void)before;
 }
 
 void ViewSession::refresh_pins() {
@@ -418,7 +416,6 @@ void ViewSession::restore(const Snapshot& b) {
     dt_bound_ = b.dt_bound;
     substeps_ = b.substeps;
     frame_time_ = b.frame_time;
-    keep_frame_time_ = false;
     spacing_ = b.spacing;
     auto_substeps_ = b.auto_substeps;
     topology_ = b.topology;

@@ -344,7 +344,6 @@ class ViewSession {
     int substeps_ = 10;
     bool auto_substeps_ = true;
     double frame_time_ = 0.0;      ///< s simulated per frame the user chose (manual substeps)
-    bool keep_frame_time_ = false; ///< rebuild keeps frame_time_ (physics changes) instead of re-anchoring it
     bool auto_dt_ = true;
     double dt_bound_ = 0.0;
     float spacing_ = 0.0f;
