@@ -16,6 +16,7 @@
 #include <imgui_impl_opengl3.h>
 #include <nlohmann/json.hpp>
 
+#include "drape/errors.hpp"
 #include "gl_context.hpp"
 #include "screenshot.hpp"
 
@@ -49,12 +50,18 @@ void scroll_cb(GLFWwindow* w, double, double dy) {
 void key_cb(GLFWwindow* w, int key, int, int action, int mods) {
     viewer_of(w)->on_key(key, action, mods);
 }
+void drop_cb(GLFWwindow* w, int count, const char** paths) {
+    viewer_of(w)->on_drop(count, paths);
+}
 
 bool ui_wants_mouse() {
     return ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureMouse;
 }
+/// A panel field has the keyboard (typing, or a control being edited): keys are ImGui's alone.
 bool ui_wants_keyboard() {
-    return ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureKeyboard;
+    if (!ImGui::GetCurrentContext()) return false;
+    const ImGuiIO& io = ImGui::GetIO();
+    return io.WantCaptureKeyboard || io.WantTextInput || ImGui::IsAnyItemActive();
 }
 
 double median(std::vector<double> v) {
@@ -84,6 +91,7 @@ Viewer::Viewer(const ViewOptions& options) : options_(options) {
     glfwSetCursorPosCallback(window_, cursor_cb);
     glfwSetScrollCallback(window_, scroll_cb);
     glfwSetKeyCallback(window_, key_cb);
+    glfwSetDropCallback(window_, drop_cb);
 
     IMGUI_CHECKVERSION();
     ImGui::CreateContext();
@@ -204,10 +212,11 @@ void Viewer::sync_gpu() {
     }
     const std::size_t grabbed = session_->sim().grabbed();
     // Automated runs (--frames) show no hover marker: Xvfb's pointer sits wherever it is.
-    const std::size_t hover = show_pins_ && options_.frames == 0 ? hover_ : no_particle;
+    const bool markers = session_->show_markers();
+    const std::size_t hover = markers && options_.frames == 0 ? hover_ : no_particle;
     if (session_->markers_version() != gpu_markers_ || grabbed != shown_grab_ || hover != shown_hover_) {
         static const std::vector<std::uint32_t> none;
-        renderer_->set_markers(show_pins_ ? session_->pinned() : none, grabbed, hover);
+        renderer_->set_markers(markers ? session_->pinned() : none, markers ? grabbed : no_particle, hover);
         gpu_markers_ = session_->markers_version();
         shown_grab_ = grabbed;
         shown_hover_ = hover;
@@ -240,28 +249,70 @@ void Viewer::start_grab(const PickHit& hit, double x, double y) {
 }
 
 void Viewer::on_mouse_button(int button, int action, int mods) {
-    double x = cursor_x_, y = cursor_y_;
-    if (action == GLFW_PRESS) {
-        if (ui_wants_mouse()) return;
-        if (button == GLFW_MOUSE_BUTTON_LEFT && !(mods & GLFW_MOD_SHIFT)) {
-            const PickHit hit = pick_at(x, y);
-            if (hit.hit() && (mods & GLFW_MOD_CONTROL)) {
-                session_->toggle_pin(hit.index); // Ctrl+click: pin / unpin
-                return;
-            }
-            if (hit.hit()) {
-                start_grab(hit, x, y);
-                return;
-            }
-            drag_ = Drag::orbit;
-        } else if (button == GLFW_MOUSE_BUTTON_LEFT || button == GLFW_MOUSE_BUTTON_RIGHT ||
-                   button == GLFW_MOUSE_BUTTON_MIDDLE) {
-            drag_ = Drag::pan;
+    // Queued: whether a press belongs to a panel is decided after ImGui::NewFrame() (handle_input_events).
+    if (action == GLFW_PRESS || action == GLFW_RELEASE) pending_buttons_.push_back({button, action, mods});
+}
+
+void Viewer::handle_input_events() {
+    for (const InputEvent& e : pending_buttons_) {
+        const int bit = 1 << std::clamp(e.code, 0, 15);
+        if (e.action == GLFW_PRESS) {
+            // The first button down decides who owns the drag until every button is up: a slider dragged past
+            // the panel's edge stays the slider's, an orbit dragged over a panel stays the camera's.
+            if (buttons_down_ == 0) ui_owns_press_ = ui_wants_mouse();
+            buttons_down_ |= bit;
+            if (!ui_owns_press_) scene_press(e.code, e.mods);
+        } else {
+            const bool was_down = (buttons_down_ & bit) != 0;
+            buttons_down_ &= ~bit;
+            if (was_down && !ui_owns_press_) scene_release(e.code);
+            if (buttons_down_ == 0) ui_owns_press_ = false;
         }
-    } else if (action == GLFW_RELEASE) {
-        if (drag_ == Drag::grab && button == GLFW_MOUSE_BUTTON_LEFT) session_->release_grab();
-        drag_ = Drag::none;
     }
+    pending_buttons_.clear();
+    for (const InputEvent& e : pending_keys_) {
+        if (e.code == GLFW_KEY_F1 && e.action == GLFW_PRESS) {
+            show_help_ = !show_help_;
+            continue;
+        }
+        if (e.code == GLFW_KEY_F12 && e.action == GLFW_PRESS) {
+            handle_key(e.code, e.mods); // a screenshot, also of a dialog
+            continue;
+        }
+        if (e.code == GLFW_KEY_Q && (e.mods & GLFW_MOD_CONTROL)) {
+            glfwSetWindowShouldClose(window_, GLFW_TRUE); // Ctrl+Q quits from anywhere, a field too
+            continue;
+        }
+        // A field being edited has the keyboard: Backspace there deletes a digit, never resets the cloth.
+        if (ui_wants_keyboard()) continue;
+        if (e.action == GLFW_REPEAT && e.code != GLFW_KEY_N) continue;
+        handle_key(e.code, e.mods);
+    }
+    pending_keys_.clear();
+}
+
+void Viewer::scene_press(int button, int mods) {
+    const double x = cursor_x_, y = cursor_y_;
+    if (button == GLFW_MOUSE_BUTTON_LEFT && !(mods & GLFW_MOD_SHIFT)) {
+        const PickHit hit = pick_at(x, y);
+        if (hit.hit() && (mods & GLFW_MOD_CONTROL)) {
+            session_->toggle_pin(hit.index); // Ctrl+click: pin / unpin
+            return;
+        }
+        if (hit.hit()) {
+            start_grab(hit, x, y);
+            return;
+        }
+        drag_ = Drag::orbit;
+    } else if (button == GLFW_MOUSE_BUTTON_LEFT || button == GLFW_MOUSE_BUTTON_RIGHT ||
+               button == GLFW_MOUSE_BUTTON_MIDDLE) {
+        drag_ = Drag::pan;
+    }
+}
+
+void Viewer::scene_release(int button) {
+    if (drag_ == Drag::grab && button == GLFW_MOUSE_BUTTON_LEFT) session_->release_grab();
+    drag_ = Drag::none;
 }
 
 void Viewer::on_cursor(double x, double y) {
@@ -298,13 +349,23 @@ void Viewer::on_scroll(double dy) {
 }
 
 void Viewer::on_key(int key, int action, int mods) {
-    if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
-    if (key == GLFW_KEY_F1 && action == GLFW_PRESS) {
-        show_help_ = !show_help_;
-        return;
+    // Queued like the mouse buttons: ImGui's keyboard flags are known after NewFrame.
+    if (action == GLFW_PRESS || action == GLFW_REPEAT) pending_keys_.push_back({key, action, mods});
+}
+
+void Viewer::on_drop(int count, const char** paths) {
+    for (int i = 0; i < count; ++i) {
+        const std::string path = paths[i];
+        if (path.size() >= 5 && path.compare(path.size() - 5, 5, ".json") == 0) {
+            std::snprintf(scene_path_.data(), scene_path_.size(), "%s", path.c_str());
+            session_->set_scene(path);
+            return;
+        }
     }
-    if (ui_wants_keyboard()) return;
-    if (action == GLFW_REPEAT && key != GLFW_KEY_N) return;
+    session_->post(MessageLevel::warning, "dropped files: none ends in .json (scene files are JSON)");
+}
+
+void Viewer::handle_key(int key, int mods) {
     switch (key) {
     case GLFW_KEY_SPACE:
         session_->set_running(!session_->running());
@@ -313,7 +374,16 @@ void Viewer::on_key(int key, int action, int mods) {
         session_->step_once();
         break;
     case GLFW_KEY_BACKSPACE:
-        session_->reset();
+        if (mods == 0) session_->reset();
+        break;
+    case GLFW_KEY_Z:
+        if ((mods & GLFW_MOD_CONTROL) && (mods & GLFW_MOD_SHIFT))
+            session_->redo();
+        else if (mods & GLFW_MOD_CONTROL)
+            session_->undo();
+        break;
+    case GLFW_KEY_Y:
+        if (mods & GLFW_MOD_CONTROL) session_->redo();
         break;
     case GLFW_KEY_R:
     case GLFW_KEY_HOME:
@@ -438,7 +508,15 @@ void Viewer::draw_scene() {
 void Viewer::save_screenshot(const std::string& path) {
     int fw = 1, fh = 1;
     glfwGetFramebufferSize(window_, &fw, &fh);
-    render::save_screenshot_png(path, fw, fh);
+    try {
+        render::save_screenshot_png(path, fw, fh);
+    } catch (const std::runtime_error& e) {
+        // Not fatal in the window (a message); the exit code says so (exit_code::write_failed).
+        std::fprintf(stderr, "drape view: %s\n", e.what());
+        session_->post(MessageLevel::error, e.what());
+        write_failed_ = true;
+        return;
+    }
     std::fprintf(stderr, "drape view: saved %s (%d x %d)\n", path.c_str(), fw, fh);
 }
 
@@ -449,19 +527,44 @@ int Viewer::run() {
         const auto frame_start = clock_type::now();
         glfwPollEvents();
         run_demo_script();
-        frame_input(last_.frame > 0.0 ? last_.frame * 1e-3 : 1.0 / 60.0);
 
         ImGui_ImplOpenGL3_NewFrame();
         ImGui_ImplGlfw_NewFrame();
+        // ImGui 1.86 reads the keys' state, not their events: a key pressed and released within one poll (fast
+        // typing, xdotool) would never be seen down, and a lost Enter leaves a field in text-edit mode. Such keys
+        // are held down for this frame.
+        ImGuiIO& io = ImGui::GetIO();
+        std::vector<int> held;
+        for (const InputEvent& e : pending_keys_)
+            if (e.code >= 0 && e.code < static_cast<int>(IM_ARRAYSIZE(io.KeysDown)) && !io.KeysDown[e.code]) {
+                io.KeysDown[e.code] = true;
+                held.push_back(e.code);
+            }
         ImGui::NewFrame();
+        handle_input_events();
+        frame_input(last_.frame > 0.0 ? last_.frame * 1e-3 : 1.0 / 60.0);
         build_ui(); // panel changes apply to the session right here, within this frame
+        if (!ImGui::IsAnyItemActive()) session_->end_edit(); // the next change is a new undo entry
+        for (int key : held)
+            io.KeysDown[key] = glfwGetKey(window_, key) == GLFW_PRESS;
 
         FrameTimes t;
         // 1. Simulate.
         auto t0 = clock_type::now();
+        const bool built_this_frame = session_->building();
         last_substeps_ = session_->advance();
         t.sim = ms_since(t0);
-        if (!session_->error().empty()) had_error_ = true;
+        if (!session_->error().empty()) {
+            had_error_ = true;
+            failure_code_ = session_->error_code();
+            if (session_->error() != reported_error_) {
+                // Said on stderr too (automation reads it; the window shows a banner).
+                reported_error_ = session_->error();
+                std::fprintf(stderr, "drape view: %s: %s\n",
+                             failure_code_ == exit_code::blow_up ? "the cloth exploded" : "simulation stopped",
+                             reported_error_.c_str());
+            }
+        }
         sync_gpu();
         update_hover();
         sync_gpu();
@@ -469,20 +572,22 @@ int Viewer::run() {
         // 2. Publish: positions + normals straight into the mapped region.
         std::span<float> region = renderer_->begin_frame(&t.wait);
         t0 = clock_type::now();
-        const Simulation& sim = session_->sim();
-        last_publish_ = session_->publisher().publish(sim.x(), sim.y(), sim.z(), region);
+        last_publish_ = session_->publish(region);
         t.publish = ms_since(t0);
         if (!last_publish_.finite) {
             // Cannot happen after a finite step (the core checks); never draw garbage if it does.
             session_->set_running(false);
             session_->post(MessageLevel::error,
                            "non-finite vertex data; drawing paused - press Backspace to reset");
+            if (!had_error_) std::fprintf(stderr, "drape view: non-finite vertex data; drawing paused\n");
             had_error_ = true;
+            failure_code_ = exit_code::non_finite;
         }
 
-        // 3. Draw.
+        // 3. Draw. A simulation stopped on an error is not drawn (an explosion would fill the window): the
+        // banner says what happened.
         t0 = clock_type::now();
-        if (last_publish_.finite) {
+        if (last_publish_.finite && session_->error().empty()) {
             draw_scene();
         } else {
             renderer_->end_frame();
@@ -506,6 +611,14 @@ int Viewer::run() {
         last_swap = now;
         last_ = t;
         if (samples_.size() < 1'000'000) samples_.push_back(t);
+        if (session_->building()) {
+            // Responsiveness while a cloth is built in the background.
+            ++building_frames_;
+            building_ms_ += t.frame;
+            building_max_ms_ = std::max(building_max_ms_, t.frame);
+        } else if (built_this_frame) {
+            install_frame_ms_ = t.frame; // the frame that swapped the new cloth in (and simulated it once)
+        }
 
         // Overlay figures: averages over ~0.5 s.
         window_sum_.sim += t.sim;
@@ -541,15 +654,15 @@ int Viewer::run() {
         ImGui::NewFrame();
         build_ui();
         std::span<float> region = renderer_->begin_frame();
-        const Simulation& sim = session_->sim();
-        session_->publisher().publish(sim.x(), sim.y(), sim.z(), region);
+        session_->publish(region);
         draw_scene();
         ImGui::Render();
         ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
         save_screenshot(final_screenshot);
     }
     if (options_.stats_json) print_stats_json();
-    return had_error_ ? 3 : 0;
+    if (had_error_) return failure_code_ ? failure_code_ : exit_code::non_finite;
+    return write_failed_ ? exit_code::write_failed : exit_code::ok;
 }
 
 void Viewer::print_stats_json() const {
@@ -582,6 +695,16 @@ void Viewer::print_stats_json() const {
     j["sim_seconds"] = s.time();
     j["max_strain"] = last_publish_.max_structural_strain;
     j["finite"] = last_publish_.finite && session_->error().empty();
+    j["camera"] = {{"yaw", camera_.yaw}, {"pitch", camera_.pitch}, {"distance", camera_.distance}};
+    j["stiffness"] = session_->fabric().stiffness;
+    j["markers"] = session_->show_markers();
+    j["undo_depth"] = session_->undo_depth();
+    j["generation"] = session_->generation(); // 1 + the rebuilds installed (resets included)
+    j["building"] = {{"frames", building_frames_},
+                     {"seconds", building_ms_ * 1e-3},
+                     {"max_frame_ms", building_max_ms_},
+                     {"install_frame_ms", install_frame_ms_}};
+    j["sim_steps"] = s.steps_done();
     j["publish_path"] = session_->publisher().grid_path() ? "grid-simd" : "general";
     j["triangles_drawn"] = renderer_->triangle_count();
     j["triangles"] = s.cloth().triangles.size() / 3;

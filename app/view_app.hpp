@@ -1,7 +1,9 @@
 // The viewer: a GLFW window with an OpenGL 4.5 core context, the frame loop, mouse and keyboard, and the Dear
 // ImGui panels (view_ui.cpp). One frame:
 //
-//   poll input -> panels (changes apply now) -> simulate `substeps` substeps (oneTBB, all threads)
+//   poll input -> ImGui frame -> queued buttons and keys (routed with this frame's capture flags) -> panels
+//   (changes apply now; rebuilds start on a background thread) -> install a finished build, or simulate
+//   `substeps` substeps (inside the session's Workers arena)
 //   -> wait for the next ring region's fence -> output stage writes positions + normals into it (oneTBB +
 //   SIMD)
 //   -> draw background, ground, cloth, markers, panels -> fence the region -> swap
@@ -57,14 +59,32 @@ class Viewer {
     void on_cursor(double x, double y);
     void on_scroll(double dy);
     void on_key(int key, int action, int mods);
+    /// Files dropped on the window: the first .json is opened as the scene.
+    void on_drop(int count, const char** paths);
 
   private:
     void frame_input(double wall_dt);
+    /// Mouse buttons and keys queued by the callbacks, handled after ImGui::NewFrame(), when ImGui's capture flags
+    /// describe the cursor and the focus of this frame (at callback time they are the previous frame's).
+    void handle_input_events();
+    void scene_press(int button, int mods);
+    void scene_release(int button);
+    void handle_key(int key, int mods);
     void build_ui();
     void ui_panels();
+    void ui_run_mode();
+    void ui_scene_file();
+    void ui_fabric();
+    void ui_physics();
+    void ui_aero();
+    void ui_lighting();
+    void ui_camera();
     void ui_overlay();
     void ui_help();
     void ui_messages();
+    void ui_error_banner();
+    void ui_build_progress();
+    void ui_confirmation();
     void sync_gpu();
     void draw_scene();
     void reset_camera();
@@ -98,6 +118,12 @@ class Viewer {
     // Input state.
     enum class Drag { none, orbit, pan, grab };
     Drag drag_ = Drag::none;
+    struct InputEvent {
+        int code, action, mods; ///< button or key
+    };
+    std::vector<InputEvent> pending_buttons_, pending_keys_;
+    int buttons_down_ = 0;      ///< bit per mouse button held
+    bool ui_owns_press_ = false; ///< the buttons held went down over a panel: ImGui's until all are released
     double cursor_x_ = 0.0, cursor_y_ = 0.0;
     bool cursor_moved_ = false;
     float grab_depth_ = 0.0f;
@@ -109,11 +135,11 @@ class Viewer {
     bool show_ui_ = true;
     bool show_help_ = false;
     bool show_ground_ = true;
-    bool show_pins_ = true;
     bool full_mesh_ = false;
     bool gpu_full_mesh_ = false;
     int ui_size_ = 64;
     float ui_node_mass_ = 0.0f;
+    std::array<char, 1024> scene_path_{};
 
     // Stats.
     std::uint64_t frame_index_ = 0;
@@ -127,6 +153,13 @@ class Viewer {
     std::size_t last_substeps_ = 0;
     PublishStats last_publish_;
     bool had_error_ = false;
+    int failure_code_ = 0;
+    bool write_failed_ = false;  ///< a screenshot could not be written
+    std::uint64_t building_frames_ = 0; ///< frames drawn while a cloth was built in the background
+    double building_ms_ = 0.0;          ///< their total
+    double building_max_ms_ = 0.0;      ///< the longest of them
+    double install_frame_ms_ = 0.0;     ///< the frame that swapped the last one in       ///< exit code of the last simulation failure (exit_code::non_finite / blow_up)
+    std::string reported_error_; ///< the failure last printed on stderr
     std::string pending_screenshot_;
 };
 

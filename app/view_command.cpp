@@ -21,16 +21,16 @@ int view_command(const ViewOptions& options) {
                      "xvfb-run -a -s \"-screen 0 1600x1000x24\" drape view --frames 300 --screenshot out.png "
                      "--stats-json (or scripts/run_viewer.sh)\n",
                      e.what());
-        return 2;
+        return exit_code::bad_input;
     } catch (const InvalidInput& e) {
         std::fprintf(stderr, "drape view: %s\n", e.what());
-        return 2;
+        return exit_code::bad_input;
     } catch (const std::bad_alloc&) {
         std::fprintf(stderr, "drape view: out of memory building the scene; choose a smaller --size\n");
-        return 2;
+        return exit_code::bad_input;
     } catch (const std::runtime_error& e) {
         std::fprintf(stderr, "drape view: %s\n", e.what());
-        return 4;
+        return exit_code::internal;
     }
 }
 

@@ -30,8 +30,10 @@ struct ViewOptions {
     bool key_help = false; ///< the F1 key help open
 };
 
-/// Opens the viewer and runs it until the window closes or `frames` frames are drawn. Returns the exit code:
-/// 0 ok, 2 bad input or no display (the message says to use xvfb-run), 3 the simulation became non-finite.
+/// Opens the viewer and runs it until the window closes or `frames` frames are drawn. Returns the exit code
+/// (drape::exit_code): 0 ok, 1 internal (no OpenGL 4.5, ...), 2 bad input or no display (the message says to use
+/// xvfb-run), 3 the simulation became non-finite, 4 the cloth exploded (BlowUpError), 5 a screenshot could not be
+/// written. A simulation failure is also printed on stderr.
 int view_command(const ViewOptions& options);
 
 } // namespace drape::app

@@ -3,12 +3,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <sstream>
 
-#include <tbb/info.h>
-
 #include "drape/errors.hpp"
+#include "drape/memory_estimate.hpp"
 #include "drape/stability.hpp"
 
 namespace drape::app {
@@ -34,10 +34,41 @@ float spec_total_mass(const SceneSpec& s) {
     return s.cloth == ClothType::grid ? s.grid.total_mass : s.tshirt.total_mass;
 }
 
+/// Automatic substeps: 1/60 s per frame, capped at view_auto_budget particle-substeps (at least 10).
+int auto_substeps_for(std::size_t particles, double dt) {
+    const int cap = std::clamp(static_cast<int>(view_auto_budget / double(std::max<std::size_t>(particles, 1))), 10,
+                               view_max_substeps);
+    const int want = static_cast<int>(std::ceil(view_frame_seconds / dt - 1e-9));
+    return std::clamp(want, 1, cap);
+}
+
+/// The spec a snapshot builds: the scene at the snapshot's resolution.
+SceneSpec sized_spec(SceneSpec spec, std::uint32_t size) {
+    if (spec.cloth == ClothType::grid)
+        spec.grid.n = size;
+    else
+        spec.tshirt.cells_per_metre = static_cast<float>(size);
+    return spec;
+}
+
+std::string grouped(std::size_t n) {
+    const std::string digits = std::to_string(n);
+    std::string out;
+    for (std::size_t i = 0; i < digits.size(); ++i) {
+        if (i > 0 && (digits.size() - i) % 3 == 0) out.push_back(',');
+        out.push_back(digits[i]);
+    }
+    return out;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
 } // namespace
 
 int ViewSession::hardware_threads() {
-    return std::max(1, tbb::info::default_concurrency());
+    return std::max(1, Workers::hardware());
 }
 
 ViewSession::ViewSession(const std::string& scene, std::optional<std::uint32_t> size, int threads,
@@ -48,21 +79,38 @@ ViewSession::ViewSession(const std::string& scene, std::optional<std::uint32_t> 
     } catch (const InvalidInput& e) {
         throw InvalidInput(std::string("--scene: ") + e.what());
     }
-    set_threads(threads > 0 ? threads : hardware_threads());
+    try {
+        workers_ = std::make_unique<Workers>(threads);
+    } catch (const InvalidInput& e) {
+        throw InvalidInput(std::string("--") + e.what());
+    }
     if (substeps) {
         auto_substeps_ = false;
         substeps_ = std::clamp(*substeps, 1, view_max_substeps);
     }
     if (!size && spec.cloth == ClothType::grid && spec.name == "hang") size = view_default_hang_size;
-    load_spec(std::move(spec), size);
+    Snapshot target = settings_for(std::move(spec), size);
+    // The first build runs here (there is no old cloth to show meanwhile); memory is checked first.
+    check_scene_memory(sized_spec(target.spec, target.size),
+                       size ? "--size " + std::to_string(*size) : "--scene " + scene);
+    Request r;
+    r.target = std::move(target);
+    r.new_scene = true;
+    r.history = History::none;
+    install(build(r.target, nullptr, false), r);
     message_ = {};
+}
+
+ViewSession::~ViewSession() {
+    if (job_ && job_->thread.joinable()) job_->thread.join();
 }
 
 void ViewSession::post(MessageLevel level, std::string text) {
     message_ = {std::move(text), level, std::chrono::steady_clock::now()};
 }
 
-void ViewSession::load_spec(SceneSpec spec, std::optional<std::uint32_t> size) {
+ViewSession::Snapshot ViewSession::settings_for(SceneSpec spec, std::optional<std::uint32_t> size) {
+    Snapshot t = snapshot();
     if (spec.cloth == ClothType::grid) {
         if (size) {
             if (*size < view_min_size || *size > view_max_size)
@@ -71,8 +119,8 @@ void ViewSession::load_spec(SceneSpec spec, std::optional<std::uint32_t> size) {
                                    std::to_string(view_max_size) + "]");
             spec.grid.n = *size;
         }
-        size_ = spec.grid.n;
-        total_mass_ = spec.grid.total_mass;
+        t.size = spec.grid.n;
+        t.total_mass = spec.grid.total_mass;
     } else {
         if (size) {
             if (*size < view_min_cells || *size > view_max_cells)
@@ -81,24 +129,23 @@ void ViewSession::load_spec(SceneSpec spec, std::optional<std::uint32_t> size) {
                                    std::to_string(view_max_cells) + "] (cells per metre of the T-shirt)");
             spec.tshirt.cells_per_metre = static_cast<float>(*size);
         }
-        size_ = static_cast<std::uint32_t>(spec.tshirt.cells_per_metre);
-        total_mass_ = spec.tshirt.total_mass;
+        t.size = static_cast<std::uint32_t>(spec.tshirt.cells_per_metre);
+        t.total_mass = spec.tshirt.total_mass;
     }
-    fabric_.stiffness = {spec.stiffness, spec.stiffness * spec.shear_ratio, spec.stiffness * spec.bend_ratio,
-                         spec.seam_stiffness};
-    fabric_.damping_ratio = spec.damping_ratio;
-    // Node mass: the scene's total over its particles (set exactly in rebuild, once the count is known).
-    fabric_.node_mass_g = 1000.0f * total_mass_ / float(std::max<std::size_t>(1, scene_particle_count(spec)));
-    params_ = spec.physics;
-    params_.dt = spec.dt ? *spec.dt : 0.0f;
-    auto_dt_ = !spec.dt.has_value();
-    spec_ = std::move(spec);
-    rebuild(false);
-    error_.clear();
-    ++scene_generation_;
+    t.fabric.stiffness = {spec.stiffness, spec.stiffness * spec.shear_ratio, spec.stiffness * spec.bend_ratio,
+                          spec.seam_stiffness};
+    t.fabric.damping_ratio = spec.damping_ratio;
+    // Node mass: the scene's total over its particles (set exactly in build(), once the count is known).
+    t.fabric.node_mass_g = 1000.0f * t.total_mass / float(std::max<std::size_t>(1, scene_particle_count(spec)));
+    t.params = spec.physics;
+    t.params.dt = spec.dt ? *spec.dt : 0.0f;
+    t.auto_dt = !spec.dt.has_value();
+    t.spec = std::move(spec);
+    t.topology = ++topology_counter_;
+    return t;
 }
 
-std::array<SpringMaterial, spring_kind_count> ViewSession::materials(const FabricSettings& f) const {
+std::array<SpringMaterial, spring_kind_count> ViewSession::materials(const FabricSettings& f) {
     // Damping as a fraction of the critical damping of one spring between two particles: kd = r * 2 sqrt(k m
     // / 2), the same rule the scenes use, so the damping means the same at any resolution and node mass.
     const float m = f.node_mass_g * 1e-3f;
@@ -137,63 +184,36 @@ double ViewSession::bound_for(const FabricSettings& f, float air_drag) const {
 }
 
 int ViewSession::auto_substep_count(double dt) const {
-    const double particles = double(particle_count());
-    const int cap = std::clamp(static_cast<int>(view_auto_budget / particles), 10, view_max_substeps);
-    const int want = static_cast<int>(std::ceil(view_frame_seconds / dt - 1e-9));
-    return std::clamp(want, 1, cap);
+    return auto_substeps_for(particle_count(), dt);
 }
 
-void ViewSession::rebuild(bool keep_state) {
-    // Capture what continues across the rebuild.
-    InitialState state;
-    std::vector<std::uint32_t> pins;
-    if (keep_state && sim_) {
-        sim_->release_grab();
-        const std::size_t n = sim_->cloth().particle_count;
-        state.x.assign(sim_->x().begin(), sim_->x().end());
-        state.y.assign(sim_->y().begin(), sim_->y().end());
-        state.z.assign(sim_->z().begin(), sim_->z().end());
-        state.vx.resize(n);
-        state.vy.resize(n);
-        state.vz.resize(n);
-        for (std::size_t i = 0; i < n; ++i) {
-            const auto v = sim_->velocity(i);
-            state.vx[i] = v[0];
-            state.vy[i] = v[1];
-            state.vz[i] = v[2];
-            if (sim_->is_pinned(i)) pins.push_back(static_cast<std::uint32_t>(i));
-        }
-    }
-    SceneSpec spec = spec_;
-    if (spec.cloth == ClothType::grid)
-        spec.grid.n = size_;
-    else
-        spec.tshirt.cells_per_metre = static_cast<float>(size_);
+ViewSession::Built ViewSession::build(Snapshot t, const KeepState* keep_state, bool keep_frame_time) {
+    SceneSpec spec = sized_spec(t.spec, t.size);
     const std::size_t count = scene_particle_count(spec);
     if (spec.cloth == ClothType::grid)
-        spec.grid.total_mass = fabric_.node_mass_g * 1e-3f * float(count);
+        spec.grid.total_mass = t.fabric.node_mass_g * 1e-3f * float(count);
     else
-        spec.tshirt.total_mass = std::clamp(fabric_.node_mass_g * 1e-3f * float(count), 0.001f, 10.0f);
-    spec.stiffness = fabric_.stiffness[0];
-    spec.damping_ratio = fabric_.damping_ratio;
+        spec.tshirt.total_mass = std::clamp(t.fabric.node_mass_g * 1e-3f * float(count), 0.001f, 10.0f);
+    spec.stiffness = t.fabric.stiffness[0];
+    spec.damping_ratio = t.fabric.damping_ratio;
     BuiltScene scene = build_scene(spec);
     Cloth& cloth = scene.cloth;
     // The exact node mass now that the count is known (the T-shirt's estimate may differ).
-    fabric_.node_mass_g = 1000.0f * spec_total_mass(spec) / float(cloth.particle_count);
-    apply_materials(cloth, materials(fabric_));
+    t.fabric.node_mass_g = 1000.0f * spec_total_mass(spec) / float(cloth.particle_count);
+    apply_materials(cloth, materials(t.fabric));
     // Pins authored by the scene become user pins: they get the node mass back and are pinned after
     // construction, so every pin the user sees can be unpinned (the core restores an unpinned particle's
     // authored mass).
     std::vector<std::uint32_t> authored;
-    const float inv = 1.0f / (fabric_.node_mass_g * 1e-3f);
+    const float inv = 1.0f / (t.fabric.node_mass_g * 1e-3f);
     for (std::size_t i = 0; i < cloth.particle_count; ++i)
         if (cloth.inv_mass[i] == 0.0f) {
             authored.push_back(static_cast<std::uint32_t>(i));
             cloth.inv_mass[i] = inv;
         }
-    has_seams_ = false;
+    t.has_seams = false;
     for (const Edge& e : cloth.edges)
-        has_seams_ = has_seams_ || e.kind == SpringKind::seam;
+        t.has_seams = t.has_seams || e.kind == SpringKind::seam;
 
     // Geometry the viewer frames and draws around.
     std::array<float, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
@@ -205,10 +225,10 @@ void ViewSession::rebuild(bool keep_state) {
             hi[a] = std::max(hi[a], p[a]);
         }
     }
-    cloth_size_ = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-3f});
-    spacing_ = spec.cloth == ClothType::grid ? spec.grid.size / float(std::max<std::uint32_t>(size_, 2) - 1)
-                                             : 1.0f / float(size_);
-    if (!authored.empty() && hi[1] - lo[1] < 0.1f * cloth_size_) {
+    t.cloth_size = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-3f});
+    t.spacing = spec.cloth == ClothType::grid ? spec.grid.size / float(std::max<std::uint32_t>(t.size, 2) - 1)
+                                              : 1.0f / float(t.size);
+    if (!authored.empty() && hi[1] - lo[1] < 0.1f * t.cloth_size) {
         // A flat cloth held by some of its particles will hang below them: frame the pins' span, a cloth size
         // deep, with a little room for the swing.
         std::array<float, 3> plo{INFINITY, INFINITY, INFINITY}, phi{-INFINITY, -INFINITY, -INFINITY};
@@ -219,27 +239,27 @@ void ViewSession::rebuild(bool keep_state) {
                 phi[a] = std::max(phi[a], p[a]);
             }
         }
-        const float swing = 0.25f * cloth_size_;
-        lo = {plo[0] - swing, phi[1] - cloth_size_, plo[2] - swing};
+        const float swing = 0.25f * t.cloth_size;
+        lo = {plo[0] - swing, phi[1] - t.cloth_size, plo[2] - swing};
         hi = {phi[0] + swing, phi[1], phi[2] + swing};
     }
-    if (params_.aero.enabled) {
+    if (t.params.aero.enabled) {
         // A pinned cloth in a steady wind flies downwind, about its own size.
-        const auto& v = params_.aero.velocity;
+        const auto& v = t.params.aero.velocity;
         const float speed = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
         if (speed > 0.0f && !authored.empty())
             for (int k = 0; k < 3; ++k) {
-                const float d = cloth_size_ * v[k] / speed;
+                const float d = t.cloth_size * v[k] / speed;
                 if (d > 0.0f)
                     hi[k] += d;
                 else
                     lo[k] += d;
             }
     }
-    ground_.reset();
+    t.ground.reset();
     for (const Collider& c : scene.params.colliders) {
         if (c.kind == ColliderKind::plane) {
-            if (c.axis[1] > 0.99f) ground_ = c.centre[1];
+            if (c.axis[1] > 0.99f) t.ground = c.centre[1];
             continue;
         }
         float r = 0.0f;
@@ -259,28 +279,58 @@ void ViewSession::rebuild(bool keep_state) {
             hi[k] = std::max({hi[k], a[k] + r, b[k] + r});
         }
     }
-    frame_lo_ = lo;
-    frame_hi_ = hi;
+    t.frame_lo = lo;
+    t.frame_hi = hi;
 
     // Run parameters: the user's (kept across rebuilds), the scene's colliders.
-    params_.colliders = scene.params.colliders;
-    dt_bound_ = stability_bound(cloth, params_.air_drag).dt_max;
-    if (auto_dt_ || !(params_.dt > 0.0f) || params_.dt > dt_bound_)
-        params_.dt = static_cast<float>(0.9 * dt_bound_);
+    t.params.colliders = scene.params.colliders;
+    t.dt_bound = stability_bound(cloth, t.params.air_drag).dt_max;
+    if (t.auto_dt || !(t.params.dt > 0.0f) || t.params.dt > t.dt_bound)
+        t.params.dt = static_cast<float>(0.9 * t.dt_bound);
     // The new simulation is complete before it replaces the old one: if anything throws, the old one stays.
-    const bool keep = keep_state && !state.x.empty() && state.x.size() == cloth.particle_count;
-    auto sim = std::make_unique<Simulation>(std::move(scene.cloth), keep ? state : scene.initial, params_);
-    for (std::uint32_t i : keep ? pins : authored)
-        sim->set_pinned(i, true);
-    auto publisher = std::make_unique<Publisher>(sim->cloth());
-    publisher_ = std::move(publisher);
-    sim_ = std::move(sim);
-    if (auto_substeps_)
-        substeps_ = auto_substep_count(params_.dt);
-    else if (!keep_frame_time_)
-        frame_time_ = double(substeps_) * double(params_.dt);
+    const bool keep = keep_state && keep_state->state.x.size() == cloth.particle_count;
+    const std::size_t particles = cloth.particle_count;
+    Built out;
+    out.sim = std::make_unique<Simulation>(std::move(scene.cloth), keep ? keep_state->state : scene.initial, t.params);
+    for (std::uint32_t i : keep ? keep_state->pins : authored)
+        out.sim->set_pinned(i, true);
+    out.publisher = std::make_unique<Publisher>(out.sim->cloth());
+    if (t.auto_substeps)
+        t.substeps = auto_substeps_for(particles, t.params.dt);
+    else if (!keep_frame_time)
+        t.frame_time = double(t.substeps) * double(t.params.dt);
+    out.snap = std::move(t);
+    return out;
+}
+
+void ViewSession::install(Built built, const Request& r) {
+    publisher_ = std::move(built.publisher);
+    sim_ = std::move(built.sim);
+    restore(built.snap);
     ++generation_;
+    if (r.new_scene) ++scene_generation_;
+    if (r.clears_error) {
+        error_.clear();
+        error_code_ = 0;
+    }
     refresh_pins();
+    switch (r.history) {
+    case History::record:
+        record(r.before, "");
+        break;
+    case History::undo:
+        if (!undo_.empty()) undo_.pop_back();
+        redo_.push_back(r.before);
+        break;
+    case History::redo:
+        if (!redo_.empty()) redo_.pop_back();
+        undo_.push_back({r.before, ""});
+        if (undo_.size() > view_undo_depth) undo_.pop_front();
+        break;
+    case History::none:
+        break;
+    }
+    edit_open_ = false;
 }
 
 void ViewSession::refresh_pins() {
@@ -292,22 +342,33 @@ void ViewSession::refresh_pins() {
 }
 
 std::size_t ViewSession::advance() {
+    // A new cloth is shown first as built: the frame that swaps it in (new GPU buffers) does not also simulate it.
+    if (poll()) return 0;
     if (!running_ && !step_pending_) return 0;
+    // A node-mass rebuild continues the motion from when it was asked for: the old cloth holds still meanwhile.
+    if (job_ && job_->request.keep) return 0;
     step_pending_ = false;
     const std::size_t before = sim_->steps_done();
     try {
-        sim_->step(static_cast<std::size_t>(substeps_));
+        workers_->run([&] { sim_->step(static_cast<std::size_t>(substeps_)); });
     } catch (const SimulationError& e) {
         running_ = false;
         error_ = e.what();
-        post(MessageLevel::error, "simulation stopped: " + error_ + " - press Backspace or Reset to restart");
+        error_code_ = dynamic_cast<const BlowUpError*>(&e) ? exit_code::blow_up : exit_code::non_finite;
+        post(MessageLevel::error, std::string(error_code_ == exit_code::blow_up ? "the cloth exploded: "
+                                                                                 : "simulation stopped: ") +
+                                      error_ + " - Reset, or Undo the last change");
     }
     return sim_->steps_done() - before;
 }
 
+PublishStats ViewSession::publish(std::span<float> out) {
+    return workers_->run([&] { return publisher_->publish(sim_->x(), sim_->y(), sim_->z(), out); });
+}
+
 void ViewSession::set_running(bool on) {
     if (on && !error_.empty()) {
-        post(MessageLevel::warning, "the simulation stopped on a non-finite value; Reset first");
+        post(MessageLevel::warning, "the simulation stopped on an error; Reset or Undo first");
         return;
     }
     running_ = on;
@@ -319,15 +380,25 @@ void ViewSession::step_once() {
     step_pending_ = true;
 }
 
+void ViewSession::set_show_markers(bool on) {
+    if (on == show_markers_) return;
+    show_markers_ = on;
+    ++markers_version_;
+}
+
 void ViewSession::reset() {
-    if (!guarded("reset", [&] { rebuild(false); })) return;
-    error_.clear();
-    post(MessageLevel::info, "reset: the scene's starting state and pins, current settings");
+    Request r;
+    r.what = "reset";
+    r.target = snapshot();
+    r.history = History::none;
+    r.done = "reset: the scene's starting state and pins, current settings";
+    request(std::move(r));
 }
 
 ViewSession::Snapshot ViewSession::snapshot() const {
-    return {size_,   spec_,   total_mass_, fabric_,   has_seams_, cloth_size_, frame_lo_,  frame_hi_,
-            ground_, params_, auto_dt_,    dt_bound_, substeps_,  spacing_,    frame_time_};
+    return {size_,   spec_,   total_mass_, fabric_,   has_seams_, cloth_size_, frame_lo_,      frame_hi_,
+            ground_, params_, auto_dt_,    dt_bound_, substeps_,  spacing_,    frame_time_, auto_substeps_,
+            topology_};
 }
 
 void ViewSession::restore(const Snapshot& b) {
@@ -345,12 +416,31 @@ void ViewSession::restore(const Snapshot& b) {
     dt_bound_ = b.dt_bound;
     substeps_ = b.substeps;
     frame_time_ = b.frame_time;
-    keep_frame_time_ = false;
     spacing_ = b.spacing;
+    auto_substeps_ = b.auto_substeps;
+    topology_ = b.topology;
 }
 
-bool ViewSession::commit_params(const SimulationParams& p) {
-    // set_params leaves the simulation as it was when it refuses, so no snapshot is needed (unlike guarded()).
+bool ViewSession::busy(const std::string& what) {
+    if (!building()) return false;
+    post(MessageLevel::warning, "not now: " + what + " waits until the cloth being built is ready (or cancel it)");
+    return true;
+}
+
+void ViewSession::record(const Snapshot& before, const std::string& key) {
+    // One entry per edit: a slider dragged through many values is undone at once.
+    if (!(edit_open_ && !key.empty() && !undo_.empty() && undo_.back().key == key)) {
+        undo_.push_back({before, key});
+        if (undo_.size() > view_undo_depth) undo_.pop_front();
+    }
+    redo_.clear();
+    edit_open_ = true;
+}
+
+bool ViewSession::commit_params(const SimulationParams& p, const std::string& key) {
+    if (busy(key)) return false;
+    // set_params leaves the simulation as it was when it refuses, so no snapshot is needed.
+    const Snapshot before = snapshot();
     try {
         sim_->set_params(p);
     } catch (const InvalidInput& e) {
@@ -358,41 +448,176 @@ bool ViewSession::commit_params(const SimulationParams& p) {
         return false;
     }
     params_ = p;
+    record(before, key);
     return true;
 }
 
-bool ViewSession::guarded(const std::string& what, const std::function<void()>& change) {
-    // Rebuilds are transactional: on bad input or no memory the old cloth and settings stay, with a message.
-    const Snapshot before = snapshot();
-    try {
-        change();
-        return true;
-    } catch (const InvalidInput& e) {
-        restore(before);
-        post(MessageLevel::warning, "refused: " + what + ": " + e.what());
-    } catch (const std::bad_alloc&) {
-        restore(before);
-        post(MessageLevel::warning, "refused: " + what + ": out of memory");
+std::shared_ptr<const ViewSession::KeepState> ViewSession::capture_state() {
+    auto k = std::make_shared<KeepState>();
+    sim_->release_grab();
+    const std::size_t n = sim_->cloth().particle_count;
+    k->state.x.assign(sim_->x().begin(), sim_->x().end());
+    k->state.y.assign(sim_->y().begin(), sim_->y().end());
+    k->state.z.assign(sim_->z().begin(), sim_->z().end());
+    k->state.vx.resize(n);
+    k->state.vy.resize(n);
+    k->state.vz.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto v = sim_->velocity(i);
+        k->state.vx[i] = v[0];
+        k->state.vy[i] = v[1];
+        k->state.vz[i] = v[2];
+        if (sim_->is_pinned(i)) k->pins.push_back(static_cast<std::uint32_t>(i));
     }
-    return false;
+    refresh_pins();
+    return k;
+}
+
+void ViewSession::request(Request r, bool confirmed) {
+    r.before = snapshot();
+    const SceneSpec spec = sized_spec(r.target.spec, r.target.size);
+    r.particles = scene_particle_count(spec);
+    r.bytes = scene_memory_bytes(spec);
+    if (!confirmed) {
+        const std::size_t available = available_memory_bytes();
+        if (r.bytes > available) {
+            post(MessageLevel::warning, "refused: " + r.what + " needs " + format_bytes(r.bytes) + " for " +
+                                            grouped(r.particles) + " particles; only " + format_bytes(available) +
+                                            " is available");
+            return;
+        }
+        if (r.particles > view_confirm_particles || (available != SIZE_MAX && r.bytes > available / 2)) {
+            confirm_ = Confirmation{r.what, r.particles, r.bytes, available};
+            confirm_request_ = std::make_unique<Request>(std::move(r));
+            post(MessageLevel::warning, "confirm: " + confirm_->what + " builds " + grouped(confirm_->particles) +
+                                            " particles and needs " + format_bytes(confirm_->bytes));
+            return;
+        }
+    }
+    confirm_.reset();
+    confirm_request_.reset();
+    if (job_) {
+        // Newest wins: the running build finishes but is discarded; this waits in its place.
+        job_->discard = true;
+        queued_ = std::make_unique<Request>(std::move(r));
+        post(MessageLevel::info, "building " + grouped(queued_->particles) + " particles for " + queued_->what +
+                                     " after the build in progress (which will be discarded)");
+        return;
+    }
+    start(std::move(r));
+}
+
+void ViewSession::confirm_build(bool yes) {
+    if (!confirm_request_) return;
+    std::unique_ptr<Request> r = std::move(confirm_request_);
+    confirm_.reset();
+    if (!yes) {
+        post(MessageLevel::info, "cancelled: " + r->what);
+        return;
+    }
+    request(std::move(*r), true);
+}
+
+void ViewSession::start(Request r) {
+    r.start = std::chrono::steady_clock::now();
+    job_ = std::make_unique<Job>();
+    job_->request = std::move(r);
+    Job* job = job_.get();
+    std::function<void(const SceneSpec&)> hook = build_hook_;
+    post(MessageLevel::info, "building " + grouped(job->request.particles) + " particles (" + job->request.what +
+                                 ", needs " + format_bytes(job->request.bytes) + ")...");
+    job->thread = std::thread([job, hook] {
+        try {
+            if (hook) hook(sized_spec(job->request.target.spec, job->request.target.size));
+            job->result = build(job->request.target, job->request.keep.get(), job->request.keep_frame_time);
+        } catch (const InvalidInput& e) {
+            job->error = e.what();
+        } catch (const std::bad_alloc&) {
+            job->error = "out of memory";
+        } catch (const std::exception& e) {
+            job->error = e.what();
+        }
+        job->done.store(true, std::memory_order_release);
+    });
+}
+
+bool ViewSession::poll() {
+    if (!job_ || !job_->done.load(std::memory_order_acquire)) return false;
+    if (job_->thread.joinable()) job_->thread.join();
+    std::unique_ptr<Job> job = std::move(job_);
+    bool installed = false;
+    if (!job->discard) {
+        const Request& r = job->request;
+        if (!job->error.empty()) {
+            // Transactional: the old cloth and settings were never touched.
+            post(MessageLevel::warning, "refused: " + r.what + ": " + job->error);
+        } else {
+            install(std::move(*job->result), r);
+            installed = true;
+            const double s = seconds_since(r.start);
+            if (!r.done.empty())
+                post(MessageLevel::info, r.done + " (" + grouped(sim_->cloth().particle_count) + " particles, built in " +
+                                             fmt(s, 3) + " s)");
+            else
+                post(MessageLevel::info, r.what + ": " + grouped(sim_->cloth().particle_count) +
+                                             " particles built in " + fmt(s, 3) + " s; node mass " +
+                                             fmt(fabric_.node_mass_g, 3) + " g, dt " + fmt(params_.dt) + " s, " +
+                                             std::to_string(substeps_) + " substeps per frame");
+        }
+    }
+    job.reset(); // frees a discarded cloth
+    if (queued_) {
+        std::unique_ptr<Request> next = std::move(queued_);
+        start(std::move(*next));
+    }
+    return installed;
+}
+
+std::optional<BuildStatus> ViewSession::build_status() const {
+    if (!job_) return std::nullopt;
+    const Request& r = job_->discard && queued_ ? *queued_ : job_->request;
+    return BuildStatus{r.what, r.particles, r.bytes, seconds_since(job_->request.start), queued_ != nullptr};
+}
+
+void ViewSession::cancel_build() {
+    if (!building()) return;
+    if (job_) job_->discard = true;
+    queued_.reset();
+    post(MessageLevel::info, "build cancelled; the current cloth stays");
+}
+
+void ViewSession::wait() {
+    while (job_) {
+        if (job_->thread.joinable()) job_->thread.join();
+        poll();
+    }
 }
 
 void ViewSession::set_scene(const std::string& name_or_path) {
-    const auto start = std::chrono::steady_clock::now();
     SceneSpec spec;
     try {
         spec = load_scene(name_or_path);
     } catch (const InvalidInput& e) {
         post(MessageLevel::warning, std::string("refused: ") + e.what());
         return;
+    } catch (const std::exception& e) {
+        // Whatever the loader lets through (a bug there) must not take the window down: refused, scene kept.
+        post(MessageLevel::warning, "refused: " + name_or_path + ": " + e.what());
+        return;
     }
     std::optional<std::uint32_t> size;
     if (spec.cloth == ClothType::grid && spec.name == "hang") size = view_default_hang_size;
-    if (!guarded("scene " + name_or_path, [&] { load_spec(std::move(spec), size); })) return;
-    const double ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    post(MessageLevel::info, "scene " + spec_.name + ": " + std::to_string(sim_->cloth().particle_count) +
-                                 " particles, built in " + fmt(ms, 3) + " ms. " + spec_.description);
+    Request r;
+    r.what = "scene " + name_or_path;
+    try {
+        r.target = settings_for(std::move(spec), size);
+    } catch (const InvalidInput& e) {
+        post(MessageLevel::warning, "refused: " + r.what + ": " + e.what());
+        return;
+    }
+    r.new_scene = true;
+    r.done = "scene " + r.target.spec.name + ": " + r.target.spec.description;
+    request(std::move(r));
 }
 
 void ViewSession::set_size(std::uint32_t n) {
@@ -401,29 +626,19 @@ void ViewSession::set_size(std::uint32_t n) {
     else
         n = std::clamp(n, view_min_cells, view_max_cells);
     if (n == size_) return;
-    const auto start = std::chrono::steady_clock::now();
-    SceneSpec probe = spec_;
-    if (grid_scene())
-        probe.grid.n = n;
-    else
-        probe.tshirt.cells_per_metre = static_cast<float>(n);
-    const std::string what = "resolution " + std::to_string(n);
-    if (!guarded(what, [&] {
-            size_ = n;
-            fabric_.node_mass_g =
-                1000.0f * total_mass_ / float(std::max<std::size_t>(1, scene_particle_count(probe)));
-            rebuild(false);
-        }))
-        return;
-    error_.clear();
-    const double ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    post(MessageLevel::info, "rebuilt: " + std::to_string(sim_->cloth().particle_count) + " particles in " +
-                                 fmt(ms, 3) + " ms; node mass " + fmt(fabric_.node_mass_g, 3) + " g (" +
-                                 fmt(total_mass_, 3) + " kg in total)");
+    Request r;
+    r.what = "resolution " + std::to_string(n);
+    r.target = snapshot();
+    r.target.size = n;
+    r.target.topology = ++topology_counter_;
+    r.target.fabric.node_mass_g =
+        1000.0f * total_mass_ / float(std::max<std::size_t>(1, scene_particle_count(sized_spec(spec_, n))));
+    request(std::move(r));
 }
 
-bool ViewSession::apply_physics(const Candidate& next, const std::string& what) {
+bool ViewSession::apply_physics(const Candidate& next, const std::string& what, const std::string& key) {
+    if (busy(what)) return false;
+    const Snapshot before = snapshot();
     const double bound = bound_for(next.fabric, next.air_drag);
     const double old_dt = sim_->params().dt;
     double new_dt = old_dt;
@@ -459,6 +674,7 @@ bool ViewSession::apply_physics(const Candidate& next, const std::string& what) 
                 new_materials[k].damping != old_materials[k].damping)
                 sim_->set_material(static_cast<SpringKind>(k), new_materials[k]);
         p.air_drag = next.air_drag;
+        p.aero = next.aero;
         sim_->set_params(p);
         p.dt = static_cast<float>(new_dt);
         sim_->set_params(p);
@@ -480,6 +696,7 @@ bool ViewSession::apply_physics(const Candidate& next, const std::string& what) 
     fabric_ = next.fabric;
     params_ = sim_->params();
     dt_bound_ = bound;
+    record(before, key);
     const int old_substeps = substeps_;
     substeps_ = new_substeps;
     std::string note = what + " applied";
@@ -502,23 +719,45 @@ bool ViewSession::apply_physics(const Candidate& next, const std::string& what) 
 
 void ViewSession::set_stiffness(SpringKind kind, float k) {
     k = std::clamp(k, view_min_stiffness, view_max_stiffness);
-    Candidate c{fabric_, sim_->params().air_drag};
+    Candidate c{fabric_, sim_->params().air_drag, sim_->params().aero};
     c.fabric.stiffness[static_cast<std::size_t>(kind)] = k;
     static const char* names[] = {"structural", "shear", "bend", "seam"};
-    apply_physics(c,
-                  std::string(names[static_cast<std::size_t>(kind)]) + " stiffness " + fixed(k, 0) + " N/m");
+    apply_physics(c, std::string(names[static_cast<std::size_t>(kind)]) + " stiffness " + fixed(k, 0) + " N/m",
+                  std::string("stiffness ") + names[static_cast<std::size_t>(kind)]);
 }
 
 void ViewSession::set_damping_ratio(float ratio) {
     ratio = std::clamp(ratio, 0.0f, 1.0f);
-    Candidate c{fabric_, sim_->params().air_drag};
+    Candidate c{fabric_, sim_->params().air_drag, sim_->params().aero};
     c.fabric.damping_ratio = ratio;
-    apply_physics(c, "damping " + fmt(ratio, 3) + " of critical");
+    apply_physics(c, "damping " + fmt(ratio, 3) + " of critical", "damping");
 }
 
 void ViewSession::set_air_drag(float drag) {
     drag = std::clamp(drag, 0.0f, 100.0f);
-    apply_physics({fabric_, drag}, "air drag " + fmt(drag, 3) + " 1/s");
+    apply_physics({fabric_, drag, sim_->params().aero}, "air drag " + fmt(drag, 3) + " 1/s", "air drag");
+}
+
+void ViewSession::set_aero(const AeroWind& aero) {
+    AeroWind a = aero;
+    a.density = std::clamp(a.density, 0.0f, 100.0f);
+    a.drag_coefficient = std::clamp(a.drag_coefficient, 0.0f, 10.0f);
+    float speed2 = 0.0f;
+    for (float& v : a.velocity) {
+        v = std::clamp(v, -100.0f, 100.0f);
+        speed2 += v * v;
+    }
+    if (speed2 > 100.0f * 100.0f) {
+        // Keep the direction, shorten to 100 m/s.
+        const float scale = 100.0f / std::sqrt(speed2) * (1.0f - 1e-6f);
+        for (float& v : a.velocity)
+            v *= scale;
+    }
+    apply_physics({fabric_, sim_->params().air_drag, a},
+                  std::string("aero wind ") + (a.enabled ? "on" : "off") + ": density " + fmt(a.density) +
+                      " kg/m^3, C_d " + fmt(a.drag_coefficient) + ", velocity (" + fmt(a.velocity[0]) + ", " +
+                      fmt(a.velocity[1]) + ", " + fmt(a.velocity[2]) + ") m/s",
+                  "aero");
 }
 
 void ViewSession::set_node_mass(float grams) {
@@ -537,44 +776,37 @@ void ViewSession::set_node_mass(float grams) {
             return;
         }
     }
-    const auto start = std::chrono::steady_clock::now();
-    const bool was_error = !error_.empty();
-    if (!guarded("node mass " + fmt(grams) + " g", [&] {
-            fabric_.node_mass_g = grams;
-            params_ = sim_->params();
-            params_.dt = static_cast<float>(new_dt);
-            if (!auto_substeps_) substeps_ = new_substeps;
-            keep_frame_time_ = true; // the node mass keeps the pace, like the other physics changes
-            rebuild(!was_error);
-            keep_frame_time_ = false;
-        }))
-        return;
-    const double ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    post(new_dt < old_dt ? MessageLevel::warning : MessageLevel::info,
-         "node mass " + fmt(grams) + " g (cloth rebuilt in " + fmt(ms) + " ms, motion kept); dt " +
-             fmt(params_.dt) + " s (bound " + fmt(dt_bound_) + " s), " + std::to_string(substeps_) +
-             " substeps per frame");
+    Request r;
+    r.what = "node mass " + fmt(grams) + " g";
+    r.target = snapshot();
+    r.target.fabric.node_mass_g = grams;
+    r.target.params = sim_->params();
+    r.target.params.dt = static_cast<float>(new_dt);
+    if (!auto_substeps_) r.target.substeps = new_substeps;
+    r.keep_frame_time = true; // the node mass keeps the pace, like the other physics changes
+    // The motion continues from here (after an error: from the scene's start).
+    if (error_.empty()) r.keep = capture_state();
+    request(std::move(r));
 }
 
 void ViewSession::set_gravity(const std::array<float, 3>& g) {
     SimulationParams p = sim_->params();
     for (int i = 0; i < 3; ++i)
         p.gravity[i] = std::clamp(g[i], -50.0f, 50.0f);
-    commit_params(p);
+    commit_params(p, "gravity");
 }
 
 void ViewSession::set_wind(bool enabled, float strength) {
     SimulationParams p = sim_->params();
     p.wind.enabled = enabled;
     p.wind.strength = std::clamp(strength, 0.0f, 100.0f);
-    commit_params(p);
+    commit_params(p, "wind");
 }
 
 void ViewSession::set_integrator(Integrator integrator) {
     SimulationParams p = sim_->params();
     p.integrator = integrator;
-    if (!commit_params(p)) return;
+    if (!commit_params(p, "integrator")) return;
     post(MessageLevel::info, std::string("integrator: ") + integrator_name(integrator));
 }
 
@@ -583,10 +815,10 @@ void ViewSession::set_strain_limit(const StrainLimit& limit) {
     p.strain_limit.ratio = std::clamp(limit.ratio, 0.0f, 10.0f);
     p.strain_limit.passes = std::clamp<std::uint32_t>(limit.passes, 1, 100);
     p.strain_limit.every = std::clamp<std::uint32_t>(limit.every, 1, 1000);
-    commit_params(p);
+    commit_params(p, "strain limit");
 }
 
-void ViewSession::set_dt(double dt) {
+bool ViewSession::apply_dt(double dt) {
     // The top of the slider is the bound itself: keep the float dt just below it (rounding to float, and the
     // probe bound against the core's own, may differ in the last bits).
     const double top = dt_bound_ * (1.0 - 1e-6);
@@ -594,34 +826,54 @@ void ViewSession::set_dt(double dt) {
     SimulationParams p = sim_->params();
     p.dt = static_cast<float>(dt);
     if (double(p.dt) > top) p.dt = std::nextafter(p.dt, 0.0f);
-    if (!commit_params(p)) return;
-    auto_dt_ = false;
+    try {
+        sim_->set_params(p);
+    } catch (const InvalidInput& e) {
+        post(MessageLevel::warning, std::string("refused: ") + e.what());
+        return false;
+    }
+    params_ = p;
     if (auto_substeps_)
         substeps_ = auto_substep_count(dt);
     else
         frame_time_ = double(substeps_) * double(p.dt);
+    return true;
+}
+
+void ViewSession::set_dt(double dt) {
+    if (busy("dt")) return;
+    const Snapshot before = snapshot();
+    if (!apply_dt(dt)) return;
+    auto_dt_ = false;
+    record(before, "dt");
 }
 
 void ViewSession::set_auto_dt(bool on) {
+    if (busy("auto dt")) return;
+    const Snapshot before = snapshot();
+    if (on && !apply_dt(0.9 * dt_bound_)) return;
     auto_dt_ = on;
-    if (on) {
-        set_dt(0.9 * dt_bound_);
-        auto_dt_ = true;
-    }
+    record(before, "auto dt");
 }
 
 void ViewSession::set_substeps(int s) {
+    if (busy("substeps")) return;
+    const Snapshot before = snapshot();
     substeps_ = std::clamp(s, 1, view_max_substeps);
     auto_substeps_ = false;
     frame_time_ = double(substeps_) * double(sim_->params().dt);
+    record(before, "substeps");
 }
 
 void ViewSession::set_auto_substeps(bool on) {
+    if (busy("auto substeps")) return;
+    const Snapshot before = snapshot();
     auto_substeps_ = on;
     if (on)
         substeps_ = auto_substep_count(sim_->params().dt);
     else
         frame_time_ = double(substeps_) * double(sim_->params().dt);
+    record(before, "auto substeps");
 }
 
 int ViewSession::manual_substep_count(double dt) const {
@@ -630,11 +882,94 @@ int ViewSession::manual_substep_count(double dt) const {
 }
 
 void ViewSession::set_threads(int t) {
-    t = std::clamp(t, 1, 256);
-    thread_limit_.reset();
-    thread_limit_ = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                          static_cast<std::size_t>(t));
-    threads_ = t;
+    t = std::clamp(t, min_workers, max_workers);
+    if (workers_ && workers_->workers() == t) return;
+    workers_.reset(); // one arena (and its global_control) at a time
+    workers_ = std::make_unique<Workers>(t);
+}
+
+void ViewSession::undo() {
+    if (building()) {
+        // The change being built never applied: undoing it is cancelling it.
+        cancel_build();
+        return;
+    }
+    confirm_build(false);
+    if (undo_.empty()) {
+        post(MessageLevel::info, "nothing to undo");
+        return;
+    }
+    apply_settings(undo_.back().settings, History::undo);
+}
+
+void ViewSession::redo() {
+    if (busy("redo")) return;
+    if (redo_.empty()) {
+        post(MessageLevel::info, "nothing to redo");
+        return;
+    }
+    apply_settings(redo_.back(), History::redo);
+}
+
+void ViewSession::apply_settings(const Snapshot& target, History history) {
+    const Snapshot before = snapshot();
+    const char* verb = history == History::undo ? "undo" : "redo";
+    const bool same_cloth = target.topology == topology_ && target.fabric.node_mass_g == fabric_.node_mass_g;
+    if (!same_cloth || !error_.empty()) {
+        // Another scene, resolution or node mass (or a stopped simulation): rebuild with those settings, keeping
+        // the motion when only the node mass differs.
+        Request r;
+        r.what = verb;
+        r.target = target;
+        r.history = history;
+        r.new_scene = target.spec.name != spec_.name;
+        r.keep_frame_time = true;
+        if (target.topology == topology_ && error_.empty()) r.keep = capture_state();
+        r.done = std::string(verb) + ": settings restored";
+        request(std::move(r));
+        return;
+    }
+    // Same cloth: materials and run parameters in place, in an order that keeps every intermediate state stable
+    // (the smaller dt first, the target dt last).
+    const std::array<SpringMaterial, spring_kind_count> old_materials = sim_->cloth().material;
+    const std::array<SpringMaterial, spring_kind_count> new_materials = materials(target.fabric);
+    const SimulationParams old_params = sim_->params();
+    try {
+        SimulationParams p = old_params;
+        p.dt = std::min(old_params.dt, target.params.dt);
+        sim_->set_params(p);
+        for (std::size_t k = 0; k < spring_kind_count; ++k)
+            sim_->set_material(static_cast<SpringKind>(k), new_materials[k]);
+        SimulationParams q = target.params;
+        q.dt = p.dt;
+        sim_->set_params(q);
+        sim_->set_params(target.params);
+    } catch (const InvalidInput& e) {
+        try {
+            SimulationParams safe = sim_->params();
+            safe.dt = std::min(safe.dt, old_params.dt);
+            sim_->set_params(safe);
+            for (std::size_t k = 0; k < spring_kind_count; ++k)
+                sim_->set_material(static_cast<SpringKind>(k), old_materials[k]);
+            sim_->set_params(old_params);
+        } catch (const InvalidInput&) {
+            // The old state was stable; a smaller dt that stays is stable too.
+        }
+        post(MessageLevel::warning, std::string("refused: ") + verb + ": " + e.what());
+        return;
+    }
+    restore(target);
+    if (history == History::undo) {
+        undo_.pop_back();
+        redo_.push_back(before);
+    } else {
+        redo_.pop_back();
+        undo_.push_back({before, ""});
+        if (undo_.size() > view_undo_depth) undo_.pop_front();
+    }
+    edit_open_ = false;
+    post(MessageLevel::info, std::string(verb) + ": settings restored (" + std::to_string(undo_.size()) +
+                                 " more to undo, " + std::to_string(redo_.size()) + " to redo)");
 }
 
 void ViewSession::grab(std::size_t i, const std::array<float, 3>& target) {

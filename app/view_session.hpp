@@ -8,22 +8,37 @@
 // with more substeps"). If that would need more than view_max_substeps, the change is refused. Either way the
 // panel shows a message; the core's own checks (set_material / set_params throw InvalidInput) are the last
 // line of defence and are caught here.
+//
+// Rebuilds (grid size, node mass, scene, reset) never block the caller: the new cloth, simulation and output stage
+// are built on a background thread from a copy of the settings while the old cloth keeps running (a node-mass
+// rebuild, which continues the motion, holds it still), and replace it in poll() (called by advance()) once
+// complete. A newer request supersedes an older one: a running build's result is discarded and only the newest
+// waiting request is built next. A build that fails (bad input, no memory) leaves the old cloth and settings with a
+// message. Requests above view_confirm_particles particles or half the memory available wait for confirm_build();
+// requests that cannot fit are refused with the figures.
+//
+// Undo: every applied change of a setting (fabric, physics, size, scene) pushes the settings as they were (a
+// Snapshot) onto a bounded history (view_undo_depth); undo() restores them (rebuilding when the cloth's topology or
+// node mass differ), redo() goes forward again. Successive changes of the same control within one edit (end_edit()
+// not called between them: a slider dragged) are one entry.
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
-
-#include <tbb/global_control.h>
 
 #include "drape/publish.hpp"
 #include "drape/scene.hpp"
 #include "drape/simulation.hpp"
+#include "drape/workers.hpp"
 
 namespace drape::app {
 
@@ -44,6 +59,10 @@ inline constexpr float view_min_node_mass_g = 0.001f;
 inline constexpr float view_max_node_mass_g = 1.0f;
 inline constexpr float view_min_stiffness = 100.0f;
 inline constexpr float view_max_stiffness = 25000.0f;
+/// Rebuilds above this many particles (or half the available memory) ask for confirmation first.
+inline constexpr std::size_t view_confirm_particles = 1u << 20;
+/// Entries of the undo history.
+inline constexpr std::size_t view_undo_depth = 64;
 
 /// What the Fabric panel edits (physics part; colours live in render::Shading).
 struct FabricSettings {
@@ -61,6 +80,23 @@ struct Message {
     std::chrono::steady_clock::time_point when{};
 };
 
+/// A rebuild in progress on the background thread (for the progress indicator).
+struct BuildStatus {
+    std::string what;          ///< e.g. "resolution 1000"
+    std::size_t particles = 0; ///< of the cloth being built
+    std::size_t bytes = 0;     ///< memory it needs (drape::scene_memory_bytes)
+    double seconds = 0.0;      ///< since it started
+    bool queued = false;       ///< a newer request waits to be built after this one (whose result is discarded)
+};
+
+/// A large rebuild waiting for the user's go-ahead.
+struct Confirmation {
+    std::string what;
+    std::size_t particles = 0;
+    std::size_t bytes = 0;     ///< needed
+    std::size_t available = 0; ///< bytes available now (SIZE_MAX: unknown)
+};
+
 class ViewSession {
   public:
     /// Loads a built-in scene by name or a scene file (.json) and builds it. size: particles per side of a
@@ -71,6 +107,10 @@ class ViewSession {
     /// Shorthand for scene "hang" of size x size particles (tests).
     ViewSession(std::uint32_t size, int threads, std::optional<int> substeps)
         : ViewSession("hang", size, threads, substeps) {}
+    /// Waits for a build in progress (its result is discarded).
+    ~ViewSession();
+    ViewSession(const ViewSession&) = delete;
+    ViewSession& operator=(const ViewSession&) = delete;
 
     Simulation& sim() noexcept { return *sim_; }
     const Simulation& sim() const noexcept { return *sim_; }
@@ -80,9 +120,44 @@ class ViewSession {
     /// Increases whenever pins or the grab change: the markers must be re-sent.
     std::uint64_t markers_version() const noexcept { return markers_version_; }
 
-    /// One frame of simulation: substeps() substeps when running (or once after step_once()). Catches
-    /// SimulationError: pauses and keeps the last finite state. Returns the substeps run.
+    /// One frame: poll(), then substeps() substeps when running (or once after step_once()), inside the workers.
+    /// Catches SimulationError (BlowUpError too): pauses, keeps the last finite state and sets error(). Returns the
+    /// substeps run.
     std::size_t advance();
+    /// Writes the current positions and normals into `out` (Publisher::publish) inside the workers.
+    PublishStats publish(std::span<float> out);
+
+    // Background rebuilds.
+    /// Installs a finished build (the new cloth replaces the old one here, on the caller's thread) and starts the
+    /// next waiting request. Never waits. Returns true when a new cloth was installed.
+    bool poll();
+    /// Whether a build runs or waits (the settings panels are read-only meanwhile).
+    bool building() const noexcept { return job_ != nullptr || queued_ != nullptr; }
+    std::optional<BuildStatus> build_status() const;
+    /// Discards the build in progress and any waiting request; the current cloth stays.
+    void cancel_build();
+    /// Blocks until no build runs or waits (tests, automation); installs the results as poll() does.
+    void wait();
+    const std::optional<Confirmation>& confirmation() const noexcept { return confirm_; }
+    /// Starts (yes) or drops the request waiting for confirmation.
+    void confirm_build(bool yes);
+    /// Called on the build thread before each build with the spec being built (tests: hold a build, or fail it
+    /// by throwing InvalidInput or std::bad_alloc).
+    void set_build_hook(std::function<void(const SceneSpec&)> hook) { build_hook_ = std::move(hook); }
+
+    // Undo.
+    void undo();
+    void redo();
+    bool can_undo() const noexcept { return !undo_.empty() || building(); }
+    bool can_redo() const noexcept { return !redo_.empty(); }
+    std::size_t undo_depth() const noexcept { return undo_.size(); }
+    /// Closes the current edit: the next change starts a new undo entry even on the same control (the viewer calls
+    /// it whenever no control is active).
+    void end_edit() noexcept { edit_open_ = false; }
+
+    // Markers (pins, grab, hover) on or off: a change bumps markers_version() so the view updates at once.
+    bool show_markers() const noexcept { return show_markers_; }
+    void set_show_markers(bool on);
 
     // Run mode.
     bool running() const noexcept { return running_; }
@@ -90,7 +165,7 @@ class ViewSession {
     void step_once();
     /// Back to the initial flat cloth with the current settings (pins: the two corners again).
     void reset();
-    /// Switches to another built-in scene (or file): its own settings, flat start.
+    /// Switches to another built-in scene (or file): its own settings, flat start (in the background).
     void set_scene(const std::string& name_or_path);
     const SceneSpec& scene() const noexcept { return spec_; }
     bool grid_scene() const noexcept { return spec_.cloth == ClothType::grid; }
@@ -120,6 +195,9 @@ class ViewSession {
     const SimulationParams& params() const noexcept { return sim_->params(); }
     void set_gravity(const std::array<float, 3>& g);
     void set_wind(bool enabled, float strength);
+    /// Aerodynamic wind (core ranges: density 0..100 kg/m^3, C_d 0..10, each velocity component within +-100 m/s
+    /// and |v| <= 100 m/s), applied with the stability rules of apply_physics.
+    void set_aero(const AeroWind& aero);
     void set_air_drag(float drag);
     void set_integrator(Integrator integrator);
     /// Provot strain limiting (ratio 0 = off); ranges as in drape/simulation.hpp.
@@ -133,7 +211,8 @@ class ViewSession {
     bool auto_substeps() const noexcept { return auto_substeps_; }
     void set_substeps(int s);
     void set_auto_substeps(bool on);
-    int threads() const noexcept { return threads_; }
+    /// Workers that run the steps and the output stage (a drape::Workers arena of exactly that many).
+    int threads() const noexcept { return workers_ ? workers_->workers() : 1; }
     static int hardware_threads();
     void set_threads(int t);
 
@@ -155,23 +234,25 @@ class ViewSession {
 
     const Message& message() const noexcept { return message_; }
     void post(MessageLevel level, std::string text);
-    /// Non-empty after the simulation stopped on a non-finite value (until reset()).
+    /// Non-empty after the simulation stopped on a non-finite value or an explosion (until reset()).
     const std::string& error() const noexcept { return error_; }
+    /// exit_code::blow_up (BlowUpError), exit_code::non_finite (another SimulationError) or exit_code::ok.
+    int error_code() const noexcept { return error_code_; }
 
   private:
     struct Candidate {
         FabricSettings fabric;
         float air_drag;
+        AeroWind aero;
     };
-    std::array<SpringMaterial, spring_kind_count> materials(const FabricSettings& f) const;
+    static std::array<SpringMaterial, spring_kind_count> materials(const FabricSettings& f);
     double bound_for(const FabricSettings& f, float air_drag) const;
     int auto_substep_count(double dt) const;
     /// Manual substeps: enough substeps of dt to cover frame_time_ (may exceed view_max_substeps: callers
     /// refuse).
     int manual_substep_count(double dt) const;
-    /// Applies a change of fabric or drag with the stability rules above; returns false if refused.
-    bool apply_physics(const Candidate& next, const std::string& what);
-    void rebuild(bool keep_state);
+    /// Applies a change of fabric, drag or aero with the stability rules above; returns false if refused.
+    bool apply_physics(const Candidate& next, const std::string& what, const std::string& key);
     struct Snapshot {
         std::uint32_t size;
         SceneSpec spec;
@@ -187,17 +268,65 @@ class ViewSession {
         int substeps;
         float spacing;
         double frame_time;
+        bool auto_substeps;
+        std::uint64_t topology; ///< changes with the scene or the resolution (a rebuild from the start)
     };
     Snapshot snapshot() const;
     void restore(const Snapshot& before);
-    /// Runs a change that rebuilds; on InvalidInput or bad_alloc restores the settings (the old simulation
-    /// was never replaced) and posts a message. Returns whether it applied.
-    bool guarded(const std::string& what, const std::function<void()>& change);
     /// Applies run parameters to the simulation and keeps them; a refused change (unstable, out of range) posts a
-    /// message and changes nothing. Returns whether it was applied.
-    bool commit_params(const SimulationParams& p);
+    /// message and changes nothing. Returns whether it was applied; records an undo entry under `key`.
+    bool commit_params(const SimulationParams& p, const std::string& key);
     void refresh_pins();
-    void load_spec(SceneSpec spec, std::optional<std::uint32_t> size);
+    /// The settings of a scene as loaded, at `size` (throws InvalidInput for a size out of range).
+    Snapshot settings_for(SceneSpec spec, std::optional<std::uint32_t> size);
+
+    // Background builds.
+    enum class History : std::uint8_t { record, undo, redo, none };
+    struct KeepState {
+        InitialState state;
+        std::vector<std::uint32_t> pins;
+    };
+    struct Request {
+        std::string what;
+        Snapshot target;                 ///< settings to build
+        std::shared_ptr<const KeepState> keep; ///< continue this motion (node mass), else the scene's start
+        bool keep_frame_time = false;
+        bool new_scene = false;
+        bool clears_error = true;
+        History history = History::record;
+        Snapshot before;                 ///< settings when requested (the undo entry)
+        std::string done;                ///< message once installed ("" = the default)
+        std::chrono::steady_clock::time_point start;
+        std::size_t particles = 0, bytes = 0;
+    };
+    struct Built {
+        Snapshot snap;
+        std::unique_ptr<Simulation> sim;
+        std::unique_ptr<Publisher> publisher;
+    };
+    struct Job {
+        Request request;
+        std::thread thread;
+        std::atomic<bool> done{false};
+        bool discard = false;
+        std::optional<Built> result;
+        std::string error;
+    };
+    /// Builds the cloth, simulation and output stage for `target` (no member is read or written: runs on the
+    /// background thread).
+    static Built build(Snapshot target, const KeepState* keep, bool keep_frame_time);
+    void install(Built built, const Request& request);
+    /// Checks memory, asks for confirmation when large, supersedes what waits, starts when idle.
+    void request(Request r, bool confirmed = false);
+    void start(Request r);
+    /// Refuses a settings change while a build runs or waits (posts why). Returns true when busy.
+    bool busy(const std::string& what);
+    void record(const Snapshot& before, const std::string& key);
+    /// Makes `target` the current settings (undo / redo), rebuilding when needed.
+    void apply_settings(const Snapshot& target, History history);
+    std::shared_ptr<const KeepState> capture_state();
+    /// Sets dt (clamped below the bound) and the substeps that follow; false (with a message) when refused.
+    bool apply_dt(double dt);
     std::size_t particle_count() const noexcept { return sim_ ? sim_->cloth().particle_count : 1; }
 
     std::uint32_t size_ = 64;
@@ -211,12 +340,10 @@ class ViewSession {
     std::uint64_t scene_generation_ = 0;
     std::unique_ptr<Simulation> sim_;
     std::unique_ptr<Publisher> publisher_;
-    std::unique_ptr<tbb::global_control> thread_limit_;
-    int threads_ = 1;
+    std::unique_ptr<Workers> workers_;
     int substeps_ = 10;
     bool auto_substeps_ = true;
     double frame_time_ = 0.0;      ///< s simulated per frame the user chose (manual substeps)
-    bool keep_frame_time_ = false; ///< rebuild keeps frame_time_ (physics changes) instead of re-anchoring it
     bool auto_dt_ = true;
     double dt_bound_ = 0.0;
     float spacing_ = 0.0f;
@@ -228,6 +355,24 @@ class ViewSession {
     std::uint64_t markers_version_ = 0;
     Message message_;
     std::string error_;
+    int error_code_ = 0;
+    bool show_markers_ = true;
+    std::uint64_t topology_ = 0;
+    std::uint64_t topology_counter_ = 0;
+    // Builds.
+    std::unique_ptr<Job> job_;
+    std::unique_ptr<Request> queued_;
+    std::optional<Confirmation> confirm_;
+    std::unique_ptr<Request> confirm_request_;
+    std::function<void(const SceneSpec&)> build_hook_;
+    // Undo.
+    struct Entry {
+        Snapshot settings;
+        std::string key;
+    };
+    std::deque<Entry> undo_;
+    std::vector<Snapshot> redo_;
+    bool edit_open_ = false;
 };
 
 } // namespace drape::app

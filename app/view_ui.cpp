@@ -1,15 +1,21 @@
 // The viewer's Dear ImGui panels: Run mode, Fabric, Physics, Lighting, Camera (seed 000's five), the stats
 // overlay, the status line and the F1 key help. Every slider is clamped to the range of SPEC.md / the issue
 // (typed values too: ImGuiSliderFlags_AlwaysClamp); changes go through ViewSession, which refuses or
-// compensates unstable ones.
+// compensates unstable ones. A value typed into a slider (Ctrl+click) applies only when committed (Enter, Tab or a
+// click elsewhere), never keystroke by keystroke; a refused value shows the current one again. While a cloth is
+// being built in the background, the settings panels are read-only and a progress window shows the build.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
 
 #include <imgui.h>
+#include <imgui_internal.h>
 
+#include "drape/errors.hpp"
+#include "drape/memory_estimate.hpp"
 #include "view_app.hpp"
 
 namespace drape::app {
@@ -40,6 +46,56 @@ bool colour_edit(const char* label, Eigen::Vector3f& c) {
     return true;
 }
 
+/// A slider that applies while dragged but, when a value is typed into it (Ctrl+click), only once the edit is
+/// committed: the keystrokes on the way (2, 25, 250, 2500 for 25000) never apply. Between edits it shows
+/// `current` (the session's value), so a refused value reverts. Returns true with `out` when a value is to apply.
+bool edit_float(const char* label, float current, float lo, float hi, const char* format, ImGuiSliderFlags flags,
+                float& out) {
+    const ImGuiID id = ImGui::GetID(label);
+    float* buffer = ImGui::GetStateStorage()->GetFloatRef(id ^ 0x5bd1e995u, current);
+    if (ImGui::GetActiveID() != id) *buffer = current;
+    const bool changed = ImGui::SliderFloat(label, buffer, lo, hi, format, flags);
+    const bool typing = ImGui::TempInputIsActive(id);
+    out = *buffer;
+    if (changed && !typing) return true;                           // dragged: live
+    return ImGui::IsItemDeactivatedAfterEdit() && *buffer != current; // typed: on commit
+}
+
+/// The same for three-component sliders (gravity, wind velocity).
+bool edit_float3(const char* label, const std::array<float, 3>& current, float lo, float hi, const char* format,
+                 ImGuiSliderFlags flags, std::array<float, 3>& out) {
+    ImGuiStorage* storage = ImGui::GetStateStorage();
+    const ImGuiID id = ImGui::GetID(label);
+    bool* was_active = storage->GetBoolRef(id ^ 0x27d4eb2du, false);
+    float* buffer[3];
+    for (unsigned i = 0; i < 3; ++i) {
+        buffer[i] = storage->GetFloatRef(id ^ (0x5bd1e995u + i), current[i]);
+        if (!*was_active) *buffer[i] = current[i];
+    }
+    float v[3] = {*buffer[0], *buffer[1], *buffer[2]};
+    const bool changed = ImGui::SliderFloat3(label, v, lo, hi, format, flags);
+    *was_active = ImGui::IsItemActive();
+    const bool typing = ImGui::TempInputIsActive(ImGui::GetActiveID());
+    for (unsigned i = 0; i < 3; ++i) {
+        *buffer[i] = v[i];
+        out[i] = v[i];
+    }
+    if (changed && !typing) return true;
+    return ImGui::IsItemDeactivatedAfterEdit() && out != current;
+}
+
+/// The same for integer sliders.
+bool edit_int(const char* label, int current, int lo, int hi, const char* format, ImGuiSliderFlags flags, int& out) {
+    const ImGuiID id = ImGui::GetID(label);
+    int* buffer = ImGui::GetStateStorage()->GetIntRef(id ^ 0x5bd1e995u, current);
+    if (ImGui::GetActiveID() != id) *buffer = current;
+    const bool changed = ImGui::SliderInt(label, buffer, lo, hi, format, flags);
+    const bool typing = ImGui::TempInputIsActive(id);
+    out = *buffer;
+    if (changed && !typing) return true;
+    return ImGui::IsItemDeactivatedAfterEdit() && *buffer != current;
+}
+
 /// Thousands separators for counts.
 std::string grouped(std::size_t n) {
     const std::string digits = std::to_string(n);
@@ -59,6 +115,8 @@ void Viewer::build_ui() {
         ui_overlay();
     }
     ui_messages();
+    ui_build_progress();
+    ui_confirmation();
     if (show_help_) ui_help();
 }
 
@@ -73,171 +131,215 @@ void Viewer::ui_panels() {
                  ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
                      ImGuiWindowFlags_AlwaysAutoResize);
     ImGui::PushItemWidth(170.0f);
-    ViewSession& s = *session_;
     const ImGuiCond open_cond = ImGuiCond_Once;
-
-    // ---- Run mode
-    // -----------------------------------------------------------------------------------------------
     ImGui::SetNextItemOpen(true, open_cond);
-    if (ImGui::CollapsingHeader("Run mode")) {
-        if (ImGui::Button(s.running() ? "Pause" : "Run", ImVec2(70, 0))) s.set_running(!s.running());
-        ImGui::SameLine();
-        if (ImGui::Button("Step", ImVec2(70, 0))) s.step_once();
-        ImGui::SameLine();
-        if (ImGui::Button("Reset", ImVec2(70, 0))) s.reset();
-        static const std::vector<std::string> names = builtin_scene_names();
-        const std::string& current = s.scene().name;
-        if (ImGui::BeginCombo("scene", current.c_str())) {
-            for (const std::string& n : names)
-                if (ImGui::Selectable(n.c_str(), n == current)) s.set_scene(n);
-            ImGui::EndCombo();
-        }
-        help_marker(s.scene().description.c_str());
-        const bool grid = s.grid_scene();
-        ImGui::SliderInt(grid ? "grid size N" : "cells per metre", &ui_size_,
-                         static_cast<int>(grid ? view_min_size : view_min_cells),
-                         static_cast<int>(grid ? view_max_size : view_max_cells), "%d", log_flags);
-        if (ImGui::IsItemDeactivatedAfterEdit()) s.set_size(static_cast<std::uint32_t>(ui_size_));
-        if (!ImGui::IsItemActive() && ui_size_ != static_cast<int>(s.size()))
-            ui_size_ = static_cast<int>(s.size());
-        help_marker(
-            "Applied when the slider is released: the cloth is rebuilt in its starting state with the same "
-            "total mass and materials.");
-        ImGui::Text("%s particles, %s springs", grouped(s.sim().cloth().particle_count).c_str(),
-                    grouped(s.sim().cloth().spring_count()).c_str());
-        ImGui::Text("simulated %.3f s  (%s substeps)", s.sim().time(), grouped(s.sim().steps_done()).c_str());
-    }
-
-    // ---- Fabric
-    // -------------------------------------------------------------------------------------------------
+    if (ImGui::CollapsingHeader("Run mode")) ui_run_mode();
     ImGui::SetNextItemOpen(true, open_cond);
-    if (ImGui::CollapsingHeader("Fabric")) {
-        ImGui::SliderFloat("node mass", &ui_node_mass_, view_min_node_mass_g, view_max_node_mass_g, "%.4f g",
-                           log_flags);
-        if (ImGui::IsItemDeactivatedAfterEdit()) s.set_node_mass(ui_node_mass_);
-        if (!ImGui::IsItemActive()) ui_node_mass_ = s.fabric().node_mass_g;
-        help_marker("Mass of one particle, 0.001-1 g (seed 000). Applied on release; the motion continues.");
-        static const char* kinds[] = {"structural k", "shear k", "bend k", "seam k"};
-        for (std::size_t k = 0; k < spring_kind_count; ++k) {
-            if (static_cast<SpringKind>(k) == SpringKind::seam && !s.has_seams()) continue;
-            float v = s.fabric().stiffness[k];
-            if (ImGui::SliderFloat(kinds[k], &v, view_min_stiffness, view_max_stiffness, "%.0f N/m",
-                                   log_flags))
-                s.set_stiffness(static_cast<SpringKind>(k), v);
-        }
-        float damping = s.fabric().damping_ratio;
-        if (ImGui::SliderFloat("damping", &damping, 0.0f, 1.0f, "%.3f", clamp_flags))
-            s.set_damping_ratio(damping);
-        help_marker("Spring damping as a fraction of the critical damping of one spring.");
-        colour_edit("colour", shading_.front_colour);
-        ImGui::SameLine();
-        ImGui::Checkbox("back colour", &shading_.back_colour_enabled);
-        if (shading_.back_colour_enabled) {
-            ImGui::SameLine();
-            colour_edit("##back", shading_.back_colour);
-        }
-        ImGui::SliderFloat("diffuse", &shading_.diffuse, 0.0f, 1.0f, "%.2f", clamp_flags);
-        ImGui::SliderFloat("specular", &shading_.specular, 0.0f, 1.0f, "%.2f", clamp_flags);
-        ImGui::SliderFloat("shininess", &shading_.shininess, 1.0f, 512.0f, "%.0f", log_flags);
-        ImGui::Checkbox("checker pattern", &shading_.checker);
-    }
-
-    // ---- Physics
-    // ------------------------------------------------------------------------------------------------
+    if (ImGui::CollapsingHeader("Fabric")) ui_fabric();
     ImGui::SetNextItemOpen(options_.panels_open, open_cond);
-    if (ImGui::CollapsingHeader("Physics")) {
-        const SimulationParams& p = s.params();
-        float g[3] = {p.gravity[0], p.gravity[1], p.gravity[2]};
-        if (ImGui::SliderFloat3("gravity", g, -50.0f, 50.0f, "%.2f", clamp_flags))
-            s.set_gravity({g[0], g[1], g[2]});
-        help_marker("m/s^2. Earth: (0, -9.81, 0).");
-        bool wind = p.wind.enabled;
-        float wind_strength = p.wind.strength;
-        bool changed = ImGui::Checkbox("wind", &wind);
-        ImGui::SameLine();
-        ImGui::PushItemWidth(112.0f);
-        changed |= ImGui::SliderFloat("##wind", &wind_strength, 0.0f, 100.0f, "%.1f m/s^2", log_flags);
-        ImGui::PopItemWidth();
-        if (changed) s.set_wind(wind, wind_strength);
-        help_marker("Seed 000's analytic field: strength x (sin 10t, 0, |sin(z + 10t)|).");
-        float drag = p.air_drag;
-        if (ImGui::SliderFloat("air drag", &drag, 0.0f, 100.0f, "%.3f 1/s", log_flags)) s.set_air_drag(drag);
-        int integrator = p.integrator == Integrator::verlet ? 1 : 0;
-        const char* integrators[] = {"symplectic Euler", "Verlet"};
-        if (ImGui::Combo("integrator", &integrator, integrators, 2))
-            s.set_integrator(integrator == 1 ? Integrator::verlet : Integrator::symplectic_euler);
-        bool limit_on = p.strain_limit.ratio > 0.0f;
-        float limit_ratio = limit_on ? p.strain_limit.ratio : 0.1f;
-        int limit_every = static_cast<int>(p.strain_limit.every);
-        bool limit_changed = ImGui::Checkbox("strain limit", &limit_on);
-        ImGui::SameLine();
-        ImGui::PushItemWidth(112.0f);
-        limit_changed |= ImGui::SliderFloat("##limit", &limit_ratio, 0.01f, 1.0f, "%.2f stretch", log_flags);
-        ImGui::PopItemWidth();
-        help_marker(
-            "Provot 1995: springs stretched beyond (1 + ratio) x rest length are pulled back after the "
-            "substep (4 passes over the colour groups).");
-        if (limit_on)
-            limit_changed |= ImGui::SliderInt("limit every", &limit_every, 1, 1000, "%d substeps", log_flags);
-        if (limit_changed)
-            s.set_strain_limit({limit_on ? limit_ratio : 0.0f, p.strain_limit.passes,
-                                static_cast<std::uint32_t>(std::max(limit_every, 1))});
-        float dt = p.dt;
-        const float bound = static_cast<float>(s.dt_bound());
-        if (ImGui::SliderFloat("dt", &dt, 1e-3f * bound, bound, "%.3e s", log_flags)) s.set_dt(dt);
-        help_marker(
-            "One substep. The slider ends at the explicit stability bound: an unstable dt cannot be chosen.");
-        bool auto_dt = s.auto_dt();
-        if (ImGui::Checkbox("auto dt (0.9 x bound)", &auto_dt)) s.set_auto_dt(auto_dt);
-        ImGui::TextDisabled("stability bound %.3e s", double(bound));
-        int substeps = s.substeps();
-        if (ImGui::SliderInt("substeps/frame", &substeps, 1, view_max_substeps, "%d", log_flags))
-            s.set_substeps(substeps);
-        bool auto_sub = s.auto_substeps();
-        if (ImGui::Checkbox("auto substeps", &auto_sub)) s.set_auto_substeps(auto_sub);
-        help_marker("Automatic: enough substeps for 1/60 s of simulated time per frame, at most ~1e6 "
-                    "particle-substeps per frame (and at least 10).");
-        int threads = s.threads();
-        if (ImGui::SliderInt("threads", &threads, 1, ViewSession::hardware_threads(), "%d", clamp_flags))
-            s.set_threads(threads);
-        ImGui::TextDisabled("%.2f ms simulated per frame", 1e3 * double(s.substeps()) * double(p.dt));
-    }
-
-    // ---- Lighting
-    // -----------------------------------------------------------------------------------------------
+    if (ImGui::CollapsingHeader("Physics")) ui_physics();
     ImGui::SetNextItemOpen(options_.panels_open, open_cond);
-    if (ImGui::CollapsingHeader("Lighting")) {
-        float lp[3] = {shading_.light_position.x(), shading_.light_position.y(), shading_.light_position.z()};
-        if (ImGui::SliderFloat3("light", lp, -10.0f, 10.0f, "%.2f", clamp_flags))
-            shading_.light_position = {lp[0], lp[1], lp[2]};
-        help_marker("Point light position, m.");
-        ImGui::SliderFloat("intensity", &shading_.light_intensity, 0.0f, 4.0f, "%.2f", clamp_flags);
-        ImGui::SliderFloat("ambient", &shading_.ambient, 0.0f, 1.0f, "%.2f", clamp_flags);
-        ImGui::Checkbox("ground grid (G)", &show_ground_);
-    }
-
-    // ---- Camera
-    // -------------------------------------------------------------------------------------------------
+    if (ImGui::CollapsingHeader("Lighting")) ui_lighting();
     ImGui::SetNextItemOpen(options_.panels_open, open_cond);
-    if (ImGui::CollapsingHeader("Camera")) {
-        if (ImGui::Button("Reset view (R)")) reset_camera();
-        ImGui::SliderFloat("field of view", &camera_.fov_y_deg, 20.0f, 90.0f, "%.0f deg", clamp_flags);
-        ImGui::Checkbox("pins and hover markers", &show_pins_);
-        ImGui::Checkbox("draw every triangle", &full_mesh_);
-        help_marker(
-            "Off: grids finer than 256 x 256 are drawn through every k-th row and column (the simulation and "
-            "the normals still use every particle). On: all triangles, slower in software GL.");
-        if (renderer_->lod_stride() > 1)
-            ImGui::TextDisabled("drawing every %u-th row: %s of %s triangles", renderer_->lod_stride(),
-                                grouped(renderer_->triangle_count()).c_str(),
-                                grouped(session_->sim().cloth().triangles.size() / 3).c_str());
-        ImGui::TextDisabled("distance %.2f m, yaw %.0f deg, pitch %.0f deg", double(camera_.distance),
-                            double(camera_.yaw) * 57.2958, double(camera_.pitch) * 57.2958);
-    }
+    if (ImGui::CollapsingHeader("Camera")) ui_camera();
     ImGui::Separator();
     ImGui::TextDisabled("F1: keys and mouse   Tab: hide panels");
     ImGui::PopItemWidth();
     ImGui::End();
+}
+
+void Viewer::ui_run_mode() {
+    ViewSession& s = *session_;
+    if (ImGui::Button(s.running() ? "Pause" : "Run", ImVec2(70, 0))) s.set_running(!s.running());
+    ImGui::SameLine();
+    if (ImGui::Button("Step", ImVec2(70, 0))) s.step_once();
+    ImGui::SameLine();
+    if (ImGui::Button("Reset", ImVec2(70, 0))) s.reset();
+    ImGui::BeginDisabled(!s.can_undo());
+    if (ImGui::Button("Undo", ImVec2(70, 0))) s.undo();
+    ImGui::EndDisabled();
+    ImGui::SameLine();
+    ImGui::BeginDisabled(!s.can_redo() || s.building());
+    if (ImGui::Button("Redo", ImVec2(70, 0))) s.redo();
+    ImGui::EndDisabled();
+    ImGui::SameLine();
+    ImGui::TextDisabled("Ctrl+Z / Ctrl+Y");
+    static const std::vector<std::string> names = builtin_scene_names();
+    const std::string& current = s.scene().name;
+    if (ImGui::BeginCombo("scene", current.c_str())) {
+        for (const std::string& n : names)
+            if (ImGui::Selectable(n.c_str(), n == current)) s.set_scene(n);
+        ImGui::EndCombo();
+    }
+    help_marker(s.scene().description.c_str());
+    ui_scene_file();
+    const bool grid = s.grid_scene();
+    ImGui::SliderInt(grid ? "grid size N" : "cells per metre", &ui_size_,
+                     static_cast<int>(grid ? view_min_size : view_min_cells),
+                     static_cast<int>(grid ? view_max_size : view_max_cells), "%d", log_flags);
+    if (ImGui::IsItemDeactivatedAfterEdit()) s.set_size(static_cast<std::uint32_t>(ui_size_));
+    if (!ImGui::IsItemActive() && ui_size_ != static_cast<int>(s.size())) ui_size_ = static_cast<int>(s.size());
+    help_marker("Applied when the slider is released: the cloth is rebuilt in the background, in its starting "
+                "state with the same total mass and materials; the old one runs until the new one is ready.");
+    ImGui::Text("%s particles, %s springs", grouped(s.sim().cloth().particle_count).c_str(),
+                grouped(s.sim().cloth().spring_count()).c_str());
+    ImGui::Text("simulated %.3f s  (%s substeps)", s.sim().time(), grouped(s.sim().steps_done()).c_str());
+}
+
+void Viewer::ui_scene_file() {
+    ImGui::PushItemWidth(230.0f);
+    const bool enter = ImGui::InputTextWithHint("##scene file", "scene file (.json) or drop one here",
+                                                scene_path_.data(), scene_path_.size(),
+                                                ImGuiInputTextFlags_EnterReturnsTrue);
+    ImGui::PopItemWidth();
+    ImGui::SameLine();
+    const bool open = ImGui::Button("Open");
+    if ((enter || open) && scene_path_[0] != '\0') session_->set_scene(scene_path_.data());
+    help_marker("Opens any scene file (docs/scene_format.md): typed here (Enter or Open) or dropped on the window. "
+                "It is built in the background; a file with an error is refused with its message and the current "
+                "scene stays.");
+}
+
+void Viewer::ui_fabric() {
+    ViewSession& s = *session_;
+    ImGui::BeginDisabled(s.building());
+    ImGui::SliderFloat("node mass", &ui_node_mass_, view_min_node_mass_g, view_max_node_mass_g, "%.4f g", log_flags);
+    if (ImGui::IsItemDeactivatedAfterEdit()) s.set_node_mass(ui_node_mass_);
+    if (!ImGui::IsItemActive()) ui_node_mass_ = s.fabric().node_mass_g;
+    help_marker("Mass of one particle, 0.001-1 g (seed 000). Applied on release (rebuilt in the background); the "
+                "motion continues.");
+    static const char* kinds[] = {"structural k", "shear k", "bend k", "seam k"};
+    for (std::size_t k = 0; k < spring_kind_count; ++k) {
+        if (static_cast<SpringKind>(k) == SpringKind::seam && !s.has_seams()) continue;
+        float v = 0.0f;
+        if (edit_float(kinds[k], s.fabric().stiffness[k], view_min_stiffness, view_max_stiffness, "%.0f N/m",
+                       log_flags, v))
+            s.set_stiffness(static_cast<SpringKind>(k), v);
+    }
+    float damping = 0.0f;
+    if (edit_float("damping", s.fabric().damping_ratio, 0.0f, 1.0f, "%.3f", clamp_flags, damping))
+        s.set_damping_ratio(damping);
+    help_marker("Spring damping as a fraction of the critical damping of one spring.");
+    ImGui::EndDisabled();
+    colour_edit("colour", shading_.front_colour);
+    ImGui::SameLine();
+    ImGui::Checkbox("back colour", &shading_.back_colour_enabled);
+    if (shading_.back_colour_enabled) {
+        ImGui::SameLine();
+        colour_edit("##back", shading_.back_colour);
+    }
+    ImGui::SliderFloat("diffuse", &shading_.diffuse, 0.0f, 1.0f, "%.2f", clamp_flags);
+    ImGui::SliderFloat("specular", &shading_.specular, 0.0f, 1.0f, "%.2f", clamp_flags);
+    ImGui::SliderFloat("shininess", &shading_.shininess, 1.0f, 512.0f, "%.0f", log_flags);
+    ImGui::Checkbox("checker pattern", &shading_.checker);
+}
+
+void Viewer::ui_physics() {
+    ViewSession& s = *session_;
+    ImGui::BeginDisabled(s.building());
+    const SimulationParams& p = s.params();
+    std::array<float, 3> g{};
+    if (edit_float3("gravity", p.gravity, -50.0f, 50.0f, "%.2f", clamp_flags, g)) s.set_gravity(g);
+    help_marker("m/s^2. Earth: (0, -9.81, 0).");
+    bool wind = p.wind.enabled;
+    float wind_strength = p.wind.strength;
+    bool changed = ImGui::Checkbox("wind", &wind);
+    ImGui::SameLine();
+    ImGui::PushItemWidth(112.0f);
+    changed |= edit_float("##wind", p.wind.strength, 0.0f, 100.0f, "%.1f m/s^2", log_flags, wind_strength);
+    ImGui::PopItemWidth();
+    if (changed) s.set_wind(wind, wind_strength);
+    help_marker("Seed 000's analytic field: strength x (sin 10t, 0, |sin(z + 10t)|).");
+    ui_aero();
+    float drag = 0.0f;
+    if (edit_float("air drag", p.air_drag, 0.0f, 100.0f, "%.3f 1/s", log_flags, drag)) s.set_air_drag(drag);
+    int integrator = p.integrator == Integrator::verlet ? 1 : 0;
+    const char* integrators[] = {"symplectic Euler", "Verlet"};
+    if (ImGui::Combo("integrator", &integrator, integrators, 2))
+        s.set_integrator(integrator == 1 ? Integrator::verlet : Integrator::symplectic_euler);
+    bool limit_on = p.strain_limit.ratio > 0.0f;
+    float limit_ratio = limit_on ? p.strain_limit.ratio : 0.1f;
+    int limit_every = static_cast<int>(p.strain_limit.every);
+    bool limit_changed = ImGui::Checkbox("strain limit", &limit_on);
+    ImGui::SameLine();
+    ImGui::PushItemWidth(112.0f);
+    limit_changed |= edit_float("##limit", limit_ratio, 0.01f, 1.0f, "%.2f stretch", log_flags, limit_ratio);
+    ImGui::PopItemWidth();
+    help_marker("Provot 1995: springs stretched beyond (1 + ratio) x rest length are pulled back after the "
+                "substep (4 passes over the colour groups).");
+    if (limit_on)
+        limit_changed |= edit_int("limit every", limit_every, 1, 1000, "%d substeps", log_flags, limit_every);
+    if (limit_changed)
+        s.set_strain_limit({limit_on ? limit_ratio : 0.0f, p.strain_limit.passes,
+                            static_cast<std::uint32_t>(std::max(limit_every, 1))});
+    float dt = 0.0f;
+    const float bound = static_cast<float>(s.dt_bound());
+    if (edit_float("dt", p.dt, 1e-3f * bound, bound, "%.3e s", log_flags, dt)) s.set_dt(dt);
+    help_marker("One substep. The slider ends at the explicit stability bound: an unstable dt cannot be chosen.");
+    bool auto_dt = s.auto_dt();
+    if (ImGui::Checkbox("auto dt (0.9 x bound)", &auto_dt)) s.set_auto_dt(auto_dt);
+    ImGui::TextDisabled("stability bound %.3e s", double(bound));
+    int substeps = 0;
+    if (edit_int("substeps/frame", s.substeps(), 1, view_max_substeps, "%d", log_flags, substeps))
+        s.set_substeps(substeps);
+    bool auto_sub = s.auto_substeps();
+    if (ImGui::Checkbox("auto substeps", &auto_sub)) s.set_auto_substeps(auto_sub);
+    help_marker("Automatic: enough substeps for 1/60 s of simulated time per frame, at most ~1e6 "
+                "particle-substeps per frame (and at least 10).");
+    ImGui::EndDisabled();
+    // Workers: a task arena of exactly this many (also above the core count).
+    int threads = 0;
+    if (edit_int("threads", s.threads(), 1, std::max(8, ViewSession::hardware_threads()), "%d", clamp_flags,
+                 threads))
+        s.set_threads(threads);
+    help_marker("Worker threads that run the substeps and the output stage (a oneTBB arena of exactly this many; "
+                "more than the cores is allowed). Results are the same for every count.");
+    ImGui::TextDisabled("%.2f ms simulated per frame", 1e3 * double(s.substeps()) * double(p.dt));
+}
+
+void Viewer::ui_aero() {
+    ViewSession& s = *session_;
+    AeroWind a = s.params().aero;
+    bool changed = ImGui::Checkbox("aero wind", &a.enabled);
+    help_marker("Aerodynamic wind per triangle (seed 004): F = -1/2 rho C_d A |v_rel| (v_rel . n) n, v_rel the "
+                "triangle's velocity less the wind's. Density 0-100 kg/m^3, C_d 0-10, |v| <= 100 m/s. dt follows "
+                "the stability bound like any other physics change.");
+    if (!a.enabled) return;
+    ImGui::Indent();
+    const AeroWind& cur = s.params().aero;
+    changed |= edit_float("air density", cur.density, 0.0f, 100.0f, "%.2f kg/m^3", log_flags, a.density);
+    changed |= edit_float("drag coeff. C_d", cur.drag_coefficient, 0.0f, 10.0f, "%.2f", clamp_flags,
+                          a.drag_coefficient);
+    changed |= edit_float3("wind velocity", cur.velocity, -100.0f, 100.0f, "%.1f", clamp_flags, a.velocity);
+    ImGui::TextDisabled("m/s; speed %.1f m/s", double(std::hypot(cur.velocity[0], cur.velocity[1], cur.velocity[2])));
+    ImGui::Unindent();
+    if (changed) s.set_aero(a);
+}
+
+void Viewer::ui_lighting() {
+    float lp[3] = {shading_.light_position.x(), shading_.light_position.y(), shading_.light_position.z()};
+    if (ImGui::SliderFloat3("light", lp, -10.0f, 10.0f, "%.2f", clamp_flags))
+        shading_.light_position = {lp[0], lp[1], lp[2]};
+    help_marker("Point light position, m.");
+    ImGui::SliderFloat("intensity", &shading_.light_intensity, 0.0f, 4.0f, "%.2f", clamp_flags);
+    ImGui::SliderFloat("ambient", &shading_.ambient, 0.0f, 1.0f, "%.2f", clamp_flags);
+    ImGui::Checkbox("ground grid (G)", &show_ground_);
+}
+
+void Viewer::ui_camera() {
+    if (ImGui::Button("Reset view (R)")) reset_camera();
+    ImGui::SliderFloat("field of view", &camera_.fov_y_deg, 20.0f, 90.0f, "%.0f deg", clamp_flags);
+    bool markers = session_->show_markers();
+    if (ImGui::Checkbox("pins and hover markers", &markers)) session_->set_show_markers(markers);
+    ImGui::Checkbox("draw every triangle", &full_mesh_);
+    help_marker("Off: grids finer than 256 x 256 are drawn through every k-th row and column (the simulation and "
+                "the normals still use every particle). On: all triangles, slower in software GL.");
+    if (renderer_->lod_stride() > 1)
+        ImGui::TextDisabled("drawing every %u-th row: %s of %s triangles", renderer_->lod_stride(),
+                            grouped(renderer_->triangle_count()).c_str(),
+                            grouped(session_->sim().cloth().triangles.size() / 3).c_str());
+    ImGui::TextDisabled("distance %.2f m, yaw %.0f deg, pitch %.0f deg", double(camera_.distance),
+                        double(camera_.yaw) * 57.2958, double(camera_.pitch) * 57.2958);
 }
 
 void Viewer::ui_overlay() {
@@ -267,20 +369,94 @@ void Viewer::ui_overlay() {
     ImGui::End();
 }
 
+void Viewer::ui_error_banner() {
+    // The simulation stopped: a non-finite value or an explosion (the health monitor's BlowUpError). The cloth is
+    // not drawn; this banner says what happened and offers the way back.
+    const ImGuiIO& io = ImGui::GetIO();
+    ViewSession& s = *session_;
+    const bool blow_up = s.error_code() == exit_code::blow_up;
+    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x * 0.5f + (show_ui_ ? 170.0f : 0.0f), io.DisplaySize.y * 0.35f),
+                            ImGuiCond_Always, ImVec2(0.5f, 0.5f));
+    ImGui::SetNextWindowBgAlpha(0.95f);
+    ImGui::PushStyleColor(ImGuiCol_WindowBg, ImVec4(0.28f, 0.06f, 0.06f, 0.95f));
+    ImGui::Begin(blow_up ? "The cloth exploded - simulation paused" : "Simulation stopped: non-finite value",
+                 nullptr, ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoMove);
+    ImGui::PushTextWrapPos(560.0f);
+    ImGui::TextColored(ImVec4(1.0f, 0.75f, 0.7f, 1.0f), "%s", s.error().c_str());
+    ImGui::Spacing();
+    ImGui::TextUnformatted(blow_up ? "The cloth is hidden instead of drawing the explosion. Reset restarts the scene "
+                                     "with the current settings; Undo restores the settings before the last change "
+                                     "and restarts."
+                                   : "The cloth is hidden. Reset restarts the scene with the current settings; Undo "
+                                     "restores the settings before the last change and restarts.");
+    ImGui::PopTextWrapPos();
+    if (ImGui::Button("Reset (Backspace)")) s.reset();
+    ImGui::SameLine();
+    ImGui::BeginDisabled(!s.can_undo());
+    if (ImGui::Button("Undo last change (Ctrl+Z)")) s.undo();
+    ImGui::EndDisabled();
+    ImGui::End();
+    ImGui::PopStyleColor();
+}
+
+void Viewer::ui_build_progress() {
+    const std::optional<BuildStatus> b = session_->build_status();
+    if (!b) return;
+    const ImGuiIO& io = ImGui::GetIO();
+    // Centred in the free area, below the stats overlay.
+    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x * 0.5f + (show_ui_ ? 170.0f : 0.0f), 170.0f), ImGuiCond_Always,
+                            ImVec2(0.5f, 0.0f));
+    ImGui::SetNextWindowBgAlpha(0.9f);
+    ImGui::Begin("building", nullptr,
+                 ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoMove |
+                     ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoNav);
+    ImGui::Text("building %s particles (%s, needs %s)...", grouped(b->particles).c_str(), b->what.c_str(),
+                format_bytes(b->bytes).c_str());
+    // No progress figure comes from the build: an animated bar with the time so far.
+    const float phase = static_cast<float>(std::fmod(b->seconds, 1.2) / 1.2);
+    ImGui::ProgressBar(phase, ImVec2(360.0f, 0.0f), "");
+    ImGui::SameLine();
+    ImGui::Text("%.1f s", b->seconds);
+    ImGui::TextDisabled(b->queued ? "a newer request waits: this result will be discarded"
+                                  : "the current cloth stays until the new one is ready");
+    if (ImGui::Button("Cancel")) session_->cancel_build();
+    ImGui::End();
+}
+
+void Viewer::ui_confirmation() {
+    const std::optional<Confirmation>& c = session_->confirmation();
+    if (!c) return;
+    if (!ImGui::IsPopupOpen("Large cloth")) ImGui::OpenPopup("Large cloth");
+    const ImGuiIO& io = ImGui::GetIO();
+    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x * 0.5f, io.DisplaySize.y * 0.4f), ImGuiCond_Always,
+                            ImVec2(0.5f, 0.5f));
+    if (ImGui::BeginPopupModal("Large cloth", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+        ImGui::Text("%s builds %s particles and needs about %s of memory.", c->what.c_str(),
+                    grouped(c->particles).c_str(), format_bytes(c->bytes).c_str());
+        if (c->available != SIZE_MAX)
+            ImGui::Text("Available now: %s. The build runs in the background; the window stays responsive, but "
+                        "each frame will be slow.",
+                        format_bytes(c->available).c_str());
+        bool close = false;
+        if (ImGui::Button("Build it")) {
+            session_->confirm_build(true);
+            close = true;
+        }
+        ImGui::SameLine();
+        if (ImGui::Button("Cancel") || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) {
+            session_->confirm_build(false);
+            close = true;
+        }
+        if (close) ImGui::CloseCurrentPopup();
+        ImGui::EndPopup();
+    }
+}
+
 void Viewer::ui_messages() {
     const ImGuiIO& io = ImGui::GetIO();
     const ViewSession& s = *session_;
     if (!s.error().empty()) {
-        ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x * 0.5f, 60.0f), ImGuiCond_Always, ImVec2(0.5f, 0.0f));
-        ImGui::SetNextWindowBgAlpha(0.92f);
-        ImGui::Begin("simulation stopped", nullptr,
-                     ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoCollapse);
-        ImGui::PushTextWrapPos(520.0f);
-        ImGui::TextColored(ImVec4(1.0f, 0.45f, 0.4f, 1.0f), "%s", s.error().c_str());
-        ImGui::PopTextWrapPos();
-        ImGui::Text("The last finite state is shown.");
-        if (ImGui::Button("Reset (Backspace)")) session_->reset();
-        ImGui::End();
+        ui_error_banner();
         return;
     }
     const Message& m = s.message();
@@ -327,7 +503,10 @@ void Viewer::ui_help() {
         {"R or Home", "reset the view"},
         {"Space", "run / pause"},
         {"N", "one frame of substeps (pauses)"},
-        {"Backspace", "reset the cloth"},
+        {"Backspace", "reset the cloth (not while a field is being edited)"},
+        {"Ctrl+Z", "undo the last parameter change (or cancel a build in progress)"},
+        {"Ctrl+Shift+Z / Ctrl+Y", "redo"},
+        {"drop a .json file", "open it as the scene"},
         {"G", "ground grid on / off"},
         {"Tab", "panels on / off"},
         {"F12", "screenshot drape_<time>.png"},

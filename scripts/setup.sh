@@ -9,7 +9,7 @@ packages=(
   libglfw3-dev python3-glad libgl-dev libgl1-mesa-dri
   libbenchmark-dev libgtest-dev
   libimgui-dev nlohmann-json3-dev libcli11-dev libstb-dev libtinyobjloader-dev
-  xvfb xauth mesa-utils
+  xvfb xauth mesa-utils xdotool
   python3-matplotlib
 )
 

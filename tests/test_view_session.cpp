@@ -3,7 +3,12 @@
 // the motion and the pins, every pin can be unpinned, grabs pin and release.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+
+#include <atomic>
+#include <cstdio>
 #include <cmath>
+#include <thread>
 
 #include "drape/errors.hpp"
 #include "drape/stability.hpp"
@@ -90,6 +95,9 @@ TEST(ViewSession, NodeMassRebuildKeepsMotionAndPins) {
     const float y_before = s.sim().y()[grid_index(16, 8, 8)];
     const auto generation = s.generation();
     s.set_node_mass(0.002f); // lighter: smaller dt, more substeps (automatic)
+    EXPECT_TRUE(s.building());
+    EXPECT_EQ(s.advance(), 0u); // the old cloth holds still while the rebuild that continues its motion runs
+    s.wait();
     EXPECT_NE(s.generation(), generation);
     EXPECT_FLOAT_EQ(s.fabric().node_mass_g, 0.002f);
     EXPECT_FLOAT_EQ(s.sim().y()[grid_index(16, 8, 8)], y_before);
@@ -119,6 +127,7 @@ TEST(ViewSession, EveryPinCanBeUnpinnedAndGrabsPin) {
 TEST(ViewSession, ResizeRebuildsAtTheDefaultMass) {
     ViewSession s(16, 2, std::nullopt);
     s.set_size(40);
+    s.wait();
     EXPECT_EQ(s.size(), 40u);
     EXPECT_EQ(s.sim().cloth().particle_count, 1600u);
     EXPECT_NEAR(s.fabric().node_mass_g, 100.0f / 1600.0f, 1e-6f);
@@ -139,6 +148,7 @@ TEST(ViewSession, SceneFilesAndBuiltInScenes) {
     EXPECT_TRUE(stable(s));
     const auto scene_gen = s.scene_generation();
     s.set_scene("tshirt");
+    s.wait();
     EXPECT_NE(s.scene_generation(), scene_gen);
     EXPECT_FALSE(s.grid_scene());
     EXPECT_TRUE(s.has_seams());
@@ -173,4 +183,362 @@ TEST(ViewSession, ManualSubstepsFollowThePaceWhateverThePath) {
     EXPECT_GE(soft.substeps(), 1);
     EXPECT_NEAR(double(soft.substeps()) * soft.params().dt, pace, soft.params().dt * 1.01);
     EXPECT_TRUE(stable(soft));
+}
+
+// ---- Background rebuilds ---------------------------------------------------------------------------------------
+
+TEST(ViewSession, MillionParticleRebuildRunsInTheBackgroundWhileFramesContinue) {
+    ViewSession s(16, 1, std::nullopt);
+    const auto generation = s.generation();
+    s.set_size(1000); // 1,000,000 particles
+    if (s.confirmation()) s.confirm_build(true); // only on a machine with little memory
+    ASSERT_TRUE(s.building());
+    ASSERT_TRUE(s.build_status().has_value());
+    EXPECT_EQ(s.build_status()->particles, 1000000u);
+    EXPECT_GT(s.build_status()->bytes, 1000000u * 100u);
+    // The "UI thread" keeps producing frames of the old cloth until the new one is swapped in.
+    std::size_t frames = 0, old_steps = 0;
+    while (s.building()) {
+        const std::size_t ran = s.advance();
+        if (!s.building() && s.sim().cloth().particle_count == 1000000u) break; // swapped in by this call
+        EXPECT_EQ(s.sim().cloth().particle_count, 256u);
+        EXPECT_EQ(ran, static_cast<std::size_t>(s.substeps())); // every frame simulated the old cloth
+        old_steps += ran;
+        ++frames;
+    }
+    std::printf("[          ] %zu frames (%zu substeps) of the old cloth while 1,000,000 particles were built\n",
+                frames, old_steps);
+    EXPECT_GT(frames, 20u) << "frames drawn while the 1M-particle cloth was built";
+    EXPECT_GT(old_steps, 0u);
+    EXPECT_EQ(s.size(), 1000u);
+    EXPECT_EQ(s.sim().cloth().particle_count, 1000000u);
+    EXPECT_EQ(s.generation(), generation + 1);
+    EXPECT_TRUE(stable(s));
+    EXPECT_NE(s.message().text.find("built in"), std::string::npos) << s.message().text;
+}
+
+TEST(ViewSession, NewerRebuildRequestSupersedesTheOneInProgress) {
+    ViewSession s(16, 1, std::nullopt);
+    std::atomic<bool> release{false};
+    std::atomic<int> builds{0};
+    s.set_build_hook([&](const SceneSpec&) {
+        ++builds;
+        while (!release.load()) std::this_thread::yield();
+    });
+    const auto generation = s.generation();
+    s.set_size(100); // held by the hook
+    s.set_size(50);  // waits; the 100 x 100 result will be discarded
+    s.set_size(30);  // replaces the 50 x 50 request
+    ASSERT_TRUE(s.build_status().has_value());
+    EXPECT_TRUE(s.build_status()->queued);
+    EXPECT_EQ(s.build_status()->particles, 900u);
+    EXPECT_EQ(s.size(), 16u);
+    s.advance();
+    EXPECT_EQ(s.sim().cloth().particle_count, 256u);
+    release = true;
+    s.wait();
+    EXPECT_EQ(builds.load(), 2); // 100 (discarded) and 30; 50 never started
+    EXPECT_EQ(s.size(), 30u);
+    EXPECT_EQ(s.sim().cloth().particle_count, 900u);
+    EXPECT_EQ(s.generation(), generation + 1); // the discarded cloth was never installed
+}
+
+TEST(ViewSession, FailedBackgroundBuildKeepsTheOldClothAndSettings) {
+    ViewSession s(16, 1, std::nullopt);
+    s.set_stiffness(SpringKind::structural, 2000.0f);
+    const auto generation = s.generation();
+    const double dt = s.params().dt;
+    const int substeps = s.substeps();
+    s.set_build_hook([](const SceneSpec&) { throw std::bad_alloc(); });
+    s.set_size(200);
+    s.wait();
+    EXPECT_EQ(s.size(), 16u);
+    EXPECT_EQ(s.generation(), generation);
+    EXPECT_EQ(s.sim().cloth().particle_count, 256u);
+    EXPECT_EQ(s.fabric().stiffness[0], 2000.0f);
+    EXPECT_EQ(s.params().dt, dt);
+    EXPECT_EQ(s.substeps(), substeps);
+    EXPECT_NE(s.message().text.find("refused: resolution 200: out of memory"), std::string::npos)
+        << s.message().text;
+    s.set_build_hook([](const SceneSpec&) { throw InvalidInput("cloth.n: too thin"); });
+    s.set_node_mass(0.5f);
+    s.wait();
+    EXPECT_NE(s.fabric().node_mass_g, 0.5f);
+    EXPECT_NE(s.message().text.find("too thin"), std::string::npos) << s.message().text;
+    EXPECT_TRUE(stable(s));
+    s.advance();
+    EXPECT_TRUE(s.sim().health().finite);
+    s.set_build_hook(nullptr);
+    s.set_size(20); // builds again after failures
+    s.wait();
+    EXPECT_EQ(s.sim().cloth().particle_count, 400u);
+}
+
+TEST(ViewSession, HugeRequestsAskForConfirmationAndThoseThatCannotFitAreRefused) {
+    ViewSession s(16, 1, std::nullopt);
+    s.set_size(2048); // 4.2M particles: above view_confirm_particles
+    if (!s.confirmation()) {
+        // Only where even that does not fit: refused outright.
+        EXPECT_NE(s.message().text.find("refused"), std::string::npos) << s.message().text;
+    } else {
+        EXPECT_EQ(s.confirmation()->particles, 2048u * 2048u);
+        EXPECT_GT(s.confirmation()->bytes, std::size_t{2048} * 2048 * 100);
+        EXPECT_NE(s.message().text.find("needs"), std::string::npos) << s.message().text;
+        EXPECT_FALSE(s.building());
+        s.confirm_build(false);
+        EXPECT_FALSE(s.confirmation());
+        EXPECT_FALSE(s.building());
+        EXPECT_EQ(s.size(), 16u);
+    }
+    // Under an address-space limit of ~1 GiB more than in use, 4.2M particles (about 2.6 GB) cannot fit.
+    rlimit old{};
+    ASSERT_EQ(getrlimit(RLIMIT_AS, &old), 0);
+    std::size_t pages = 0;
+    {
+        FILE* f = std::fopen("/proc/self/statm", "r");
+        ASSERT_NE(f, nullptr);
+        ASSERT_EQ(std::fscanf(f, "%zu", &pages), 1);
+        std::fclose(f);
+    }
+    rlimit tight = old;
+    tight.rlim_cur = pages * 4096 + (std::size_t{1} << 30);
+    if (old.rlim_cur != RLIM_INFINITY && old.rlim_cur < tight.rlim_cur) tight.rlim_cur = old.rlim_cur;
+    ASSERT_EQ(setrlimit(RLIMIT_AS, &tight), 0);
+    s.set_size(2048);
+    const std::string message = s.message().text;
+    const bool building = s.building(), confirming = s.confirmation().has_value();
+    ASSERT_EQ(setrlimit(RLIMIT_AS, &old), 0);
+    EXPECT_FALSE(building);
+    EXPECT_FALSE(confirming);
+    EXPECT_NE(message.find("refused: resolution 2048 needs"), std::string::npos) << message;
+    EXPECT_NE(message.find("available"), std::string::npos) << message;
+    EXPECT_EQ(s.size(), 16u);
+}
+
+TEST(ViewSession, SettingsWaitWhileABuildRunsAndUndoCancelsIt) {
+    ViewSession s(16, 1, std::nullopt);
+    std::atomic<bool> release{false};
+    s.set_build_hook([&](const SceneSpec&) {
+        while (!release.load()) std::this_thread::yield();
+    });
+    s.set_size(40);
+    s.set_stiffness(SpringKind::structural, 3000.0f); // refused: it would be lost when the new cloth arrives
+    EXPECT_EQ(s.fabric().stiffness[0], 1000.0f);
+    EXPECT_NE(s.message().text.find("not now"), std::string::npos) << s.message().text;
+    s.undo(); // cancels the build in progress
+    EXPECT_NE(s.message().text.find("cancelled"), std::string::npos) << s.message().text;
+    release = true;
+    s.wait();
+    EXPECT_EQ(s.size(), 16u);
+    EXPECT_EQ(s.sim().cloth().particle_count, 256u);
+}
+
+// ---- Undo ------------------------------------------------------------------------------------------------------
+
+TEST(ViewSession, UndoAndRedoParameterChanges) {
+    ViewSession s(16, 1, std::nullopt);
+    const double dt0 = s.params().dt;
+    EXPECT_FALSE(s.can_undo());
+    s.set_stiffness(SpringKind::structural, 4000.0f);
+    s.end_edit();
+    s.set_air_drag(3.0f);
+    s.end_edit();
+    s.set_gravity({0.0f, -5.0f, 0.0f});
+    s.end_edit();
+    EXPECT_EQ(s.undo_depth(), 3u);
+    s.undo();
+    EXPECT_EQ(s.params().gravity[1], -9.81f);
+    EXPECT_EQ(s.sim().params().gravity[1], -9.81f);
+    EXPECT_EQ(s.params().air_drag, 3.0f);
+    s.undo();
+    EXPECT_EQ(s.params().air_drag, 0.2f);
+    EXPECT_EQ(s.sim().params().air_drag, 0.2f);
+    EXPECT_EQ(s.fabric().stiffness[0], 4000.0f);
+    s.undo();
+    EXPECT_EQ(s.fabric().stiffness[0], 1000.0f);
+    EXPECT_EQ(s.sim().cloth().material[0].stiffness, 1000.0f);
+    EXPECT_EQ(s.params().dt, dt0);
+    EXPECT_TRUE(stable(s));
+    EXPECT_FALSE(s.can_undo());
+    s.undo(); // nothing left: a message, no change
+    EXPECT_NE(s.message().text.find("nothing to undo"), std::string::npos);
+    s.redo();
+    EXPECT_EQ(s.fabric().stiffness[0], 4000.0f);
+    EXPECT_EQ(s.sim().cloth().material[0].stiffness, 4000.0f);
+    EXPECT_TRUE(stable(s));
+    s.redo();
+    EXPECT_EQ(s.params().air_drag, 3.0f);
+    // A new change drops what could be redone.
+    s.set_damping_ratio(0.5f);
+    EXPECT_FALSE(s.can_redo());
+    s.advance();
+    EXPECT_TRUE(s.sim().health().finite);
+}
+
+TEST(ViewSession, OneDraggedSliderIsOneUndoEntryAndTheHistoryIsBounded) {
+    ViewSession s(16, 1, std::nullopt);
+    for (float k : {1200.0f, 1500.0f, 1800.0f, 2100.0f}) // one drag: no end_edit() between
+        s.set_stiffness(SpringKind::shear, k);
+    s.end_edit();
+    EXPECT_EQ(s.undo_depth(), 1u);
+    s.undo();
+    EXPECT_EQ(s.fabric().stiffness[1], 500.0f);
+    for (int i = 0; i < 100; ++i) {
+        s.set_damping_ratio(0.01f * float(i + 1));
+        s.end_edit();
+    }
+    EXPECT_EQ(s.undo_depth(), view_undo_depth);
+}
+
+TEST(ViewSession, UndoOfAResolutionOrSceneChangeRebuilds) {
+    ViewSession s(16, 1, std::nullopt);
+    s.set_size(24);
+    s.wait();
+    ASSERT_EQ(s.sim().cloth().particle_count, 576u);
+    s.set_node_mass(0.3f);
+    s.wait();
+    ASSERT_FLOAT_EQ(s.fabric().node_mass_g, 0.3f);
+    s.set_scene("sphere");
+    s.wait();
+    ASSERT_EQ(s.scene().name, "sphere");
+    s.undo();
+    s.wait();
+    EXPECT_EQ(s.scene().name, "hang");
+    EXPECT_FLOAT_EQ(s.fabric().node_mass_g, 0.3f);
+    EXPECT_EQ(s.sim().cloth().particle_count, 576u);
+    s.undo(); // the node mass: the motion continues
+    s.wait();
+    EXPECT_NEAR(s.fabric().node_mass_g, 100.0f / 576.0f, 1e-5f);
+    s.undo();
+    s.wait();
+    EXPECT_EQ(s.sim().cloth().particle_count, 256u);
+    EXPECT_TRUE(stable(s));
+    s.redo();
+    s.wait();
+    EXPECT_EQ(s.sim().cloth().particle_count, 576u);
+}
+
+// ---- Aero wind, markers, errors --------------------------------------------------------------------------------
+
+TEST(ViewSession, AeroWindFromThePhysicsPanel) {
+    ViewSession s(16, 1, std::nullopt);
+    AeroWind a;
+    a.enabled = true;
+    a.density = 1.2f;
+    a.drag_coefficient = 1.5f;
+    a.velocity = {3.0f, 0.0f, 4.0f};
+    s.set_aero(a);
+    EXPECT_TRUE(s.sim().params().aero.enabled);
+    EXPECT_EQ(s.sim().params().aero.drag_coefficient, 1.5f);
+    EXPECT_EQ(s.params().aero.velocity[2], 4.0f);
+    EXPECT_TRUE(stable(s));
+    for (int i = 0; i < 5; ++i)
+        s.advance();
+    EXPECT_TRUE(s.sim().health().finite);
+    EXPECT_GT(s.sim().z()[grid_index(16, 8, 15)], 0.0f); // blown downwind (+z)
+    // Out of range: clamped to the core's ranges (|v| <= 100 m/s keeps its direction).
+    a.density = 1000.0f;
+    a.drag_coefficient = -1.0f;
+    a.velocity = {300.0f, 0.0f, 300.0f};
+    s.end_edit();
+    s.set_aero(a);
+    EXPECT_EQ(s.params().aero.density, 100.0f);
+    EXPECT_EQ(s.params().aero.drag_coefficient, 0.0f);
+    EXPECT_LE(std::hypot(s.params().aero.velocity[0], s.params().aero.velocity[2]), 100.0f);
+    EXPECT_NEAR(s.params().aero.velocity[0], s.params().aero.velocity[2], 1e-3f);
+    s.end_edit();
+    s.undo();
+    EXPECT_EQ(s.params().aero.drag_coefficient, 1.5f);
+    s.undo();
+    EXPECT_FALSE(s.sim().params().aero.enabled);
+}
+
+TEST(ViewSession, MarkersToggleTakesEffectAtOnce) {
+    ViewSession s(16, 1, std::nullopt);
+    const auto version = s.markers_version();
+    s.set_show_markers(false);
+    EXPECT_FALSE(s.show_markers());
+    EXPECT_NE(s.markers_version(), version); // the view re-sends its markers on this frame, not the next pin
+    const auto off = s.markers_version();
+    s.set_show_markers(true);
+    EXPECT_NE(s.markers_version(), off);
+}
+
+TEST(ViewSession, NonFiniteStepPausesAndUndoRestartsWithTheSettingsBefore) {
+    ViewSession s(16, 1, std::nullopt);
+    s.set_stiffness(SpringKind::structural, 3000.0f);
+    s.end_edit();
+    s.grab(grid_index(16, 15, 15), {1e30f, 1e30f, 1e30f}); // far beyond float range once squared
+    for (int i = 0; i < 3 && s.error().empty(); ++i)
+        s.advance();
+    ASSERT_FALSE(s.error().empty());
+    EXPECT_EQ(s.error_code(), exit_code::non_finite);
+    EXPECT_FALSE(s.running());
+    EXPECT_TRUE(s.sim().health().finite); // the last finite state is kept
+    s.set_running(true);                  // refused until reset or undo
+    EXPECT_FALSE(s.running());
+    s.undo(); // the stiffness before, from the start
+    s.wait();
+    EXPECT_TRUE(s.error().empty());
+    EXPECT_EQ(s.error_code(), exit_code::ok);
+    EXPECT_EQ(s.fabric().stiffness[0], 1000.0f);
+    s.set_running(true);
+    s.advance();
+    EXPECT_TRUE(s.sim().health().finite);
+}
+
+TEST(ViewSession, WorkersRunTheRequestedCount) {
+    ViewSession s(16, 3, std::nullopt);
+    EXPECT_EQ(s.threads(), 3);
+    s.set_threads(8); // more than the cores of a small machine: still 8
+    EXPECT_EQ(s.threads(), 8);
+    s.advance();
+    EXPECT_TRUE(s.sim().health().finite);
+}
+
+TEST(ViewSession, OpensSceneFilesInTheBackgroundAndRefusesBadOnes) {
+    const std::string dir = ::testing::TempDir();
+    const std::string good = dir + "/drape_view_open.json", bad = dir + "/drape_view_bad.json",
+                      overflow = dir + "/drape_view_overflow.json";
+    {
+        FILE* f = std::fopen(good.c_str(), "w");
+        ASSERT_NE(f, nullptr);
+        std::fputs(R"({"scene": "opened", "cloth": {"type": "grid", "n": 12}})", f);
+        std::fclose(f);
+        f = std::fopen(bad.c_str(), "w");
+        ASSERT_NE(f, nullptr);
+        std::fputs(R"({"scene": "bad", "cloth": {"type": "grid", "n": 1}})", f);
+        std::fclose(f);
+        f = std::fopen(overflow.c_str(), "w");
+        ASSERT_NE(f, nullptr);
+        std::fputs(R"({"scene": "overflow", "cloth": {"type": "grid", "n": 1e400}})", f);
+        std::fclose(f);
+    }
+    ViewSession s(16, 1, std::nullopt);
+    const auto scene_gen = s.scene_generation();
+    s.set_scene(good);
+    EXPECT_TRUE(s.building());
+    EXPECT_EQ(s.sim().cloth().particle_count, 256u); // the old scene runs until the new one is in
+    s.wait();
+    EXPECT_EQ(s.scene().name, "opened");
+    EXPECT_EQ(s.sim().cloth().particle_count, 144u);
+    EXPECT_NE(s.scene_generation(), scene_gen);
+    s.set_scene(bad); // refused with the file's message; the opened scene stays
+    EXPECT_FALSE(s.building());
+    EXPECT_NE(s.message().text.find("refused"), std::string::npos) << s.message().text;
+    EXPECT_NE(s.message().text.find("drape_view_bad.json"), std::string::npos) << s.message().text;
+    EXPECT_EQ(s.scene().name, "opened");
+    s.set_scene(overflow); // never an exception out of the viewer
+    EXPECT_NE(s.message().text.find("refused"), std::string::npos) << s.message().text;
+    EXPECT_EQ(s.scene().name, "opened");
+    s.set_scene(dir + "/no_such_file.json");
+    EXPECT_NE(s.message().text.find("cannot open"), std::string::npos) << s.message().text;
+    EXPECT_EQ(s.sim().cloth().particle_count, 144u);
+    s.undo(); // back to the scene before the file
+    s.wait();
+    EXPECT_EQ(s.scene().name, "hang");
+    EXPECT_EQ(s.sim().cloth().particle_count, 256u);
+    std::remove(good.c_str());
+    std::remove(bad.c_str());
+    std::remove(overflow.c_str());
 }

@@ -10,6 +10,15 @@ Image checks (the PNG is decoded here with zlib alone, no imaging library):
   * the cloth covers a plausible share of the frame: pixels of the cloth's front (red) or back (beige) colour make up
     between 1% and 60% of the image;
   * the shading varies: over the cloth pixels, the brightness spans a real range (lighting, not a flat fill).
+
+Input (when xdotool is installed; scripts/setup.sh installs it): the viewer runs interactively under Xvfb and xdotool
+drives the real mouse and keyboard, then Ctrl+Q quits and the --stats-json object is checked:
+  * a slider dragged past the panel's edge moves the slider and never orbits the camera (the press is the panel's
+    until the button is released);
+  * 25000 N/m typed into the structural stiffness (refused at 900 manual substeps: it would need > 1000) leaves
+    1000 N/m, not a keystroke on the way (2500, 250);
+  * Backspace inside a typed field edits the field and does not reset the cloth; Enter commits and leaves the field
+    (a later Backspace outside the field does reset).
 Exit 0 on success, 1 with a message naming the failed check.
 
 Usage: viewer_smoke.py --drape build/release/drape [--keep DIR]
@@ -22,6 +31,7 @@ import struct
 import subprocess
 import sys
 import tempfile
+import time
 import zlib
 
 
@@ -81,12 +91,108 @@ def luminance(r, g, b):
     return 0.2126 * r + 0.7152 * g + 0.0722 * b
 
 
+def drive_input(drape):
+    """Runs inside xvfb-run (DISPLAY set): the viewer, driven by xdotool. Returns 0 or 1."""
+    def xdo(*args):
+        subprocess.run(["xdotool"] + [str(a) for a in args], check=True, timeout=30)
+
+    # Panel layout at the default 1280 x 800 window (Run mode and Fabric open): the rows' centres, window pixels.
+    structural_k = (100, 262)
+    shear_k = (100, 285)
+    proc = subprocess.Popen([drape, "view", "--substeps", "900", "--stats-json", "--no-vsync"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        wid = subprocess.run(["xdotool", "search", "--sync", "--onlyvisible", "--name", "drape - cloth viewer"],
+                             capture_output=True, text=True, timeout=60).stdout.split()[0]
+        # Let it draw its first frames (shaders compile, the panels are laid out) on a busy machine.
+        time.sleep(6.0)
+
+        def move(x, y):
+            xdo("mousemove", "--window", wid, x, y)
+
+        # 1. Drag the structural stiffness slider 500 px right, far past the panel's edge (340 px), and back a bit;
+        # the move and the press arrive in one poll, as a quick user's do.
+        subprocess.run(["xdotool", "mousemove", "--window", wid, *map(str, structural_k), "mousedown", "1"],
+                       check=True, timeout=30)
+        for dx in range(40, 520, 40):
+            move(structural_k[0] + dx, structural_k[1] + dx // 10)
+            time.sleep(0.15)
+        time.sleep(0.8)
+        xdo("mouseup", "1")
+        time.sleep(1.0)
+        # 2. Undo it (Ctrl+Z), then type 25000 into the same slider (Ctrl+click opens its text field).
+        xdo("key", "--window", wid, "ctrl+z")
+        time.sleep(1.0)
+        move(*structural_k)
+        time.sleep(0.8)
+        xdo("keydown", "ctrl", "click", "1", "keyup", "ctrl")
+        time.sleep(1.0)
+        xdo("type", "--delay", "80", "25000")
+        xdo("key", "Return")
+        time.sleep(1.0)
+        # 3. Type 700 into the shear stiffness, with a Backspace inside the field (700 -> 70 -> 700), then Enter.
+        move(*shear_k)
+        time.sleep(0.8)
+        xdo("keydown", "ctrl", "click", "1", "keyup", "ctrl")
+        time.sleep(1.0)
+        xdo("type", "--delay", "60", "700")
+        xdo("key", "BackSpace")
+        xdo("type", "--delay", "60", "0")
+        xdo("key", "Return")
+        time.sleep(1.0)
+        # Outside any field Backspace resets the cloth (the cursor away from the panel).
+        move(800, 500)
+        time.sleep(0.8)
+        xdo("key", "BackSpace")
+        time.sleep(1.5)
+        xdo("key", "--window", wid, "ctrl+q")
+        try:
+            out, err = proc.communicate(timeout=60)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            out, err = proc.communicate()
+            print(f"FAIL: the viewer did not quit on Ctrl+Q within 60 s; stderr: {err[-2000:]}")
+            return 1
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    if proc.returncode != 0:
+        print(f"FAIL: the driven viewer exited with {proc.returncode}: {err}")
+        return 1
+    stats = json.loads([l for l in out.splitlines() if l.strip()][-1])
+    print(f"driven viewer: camera {stats['camera']}, stiffness {stats['stiffness']}, generation {stats['generation']}, "
+          f"undo depth {stats['undo_depth']}")
+    ok = True
+    if abs(stats["camera"]["yaw"] - 0.62) > 1e-6 or abs(stats["camera"]["pitch"] - 0.30) > 1e-6:
+        print("FAIL: dragging a slider past the panel's edge orbited the camera")
+        ok = False
+    if stats["undo_depth"] < 1:
+        print("FAIL: the slider drag changed nothing (the panel did not get the press?)")
+        ok = False
+    if stats["stiffness"][0] != 1000.0:
+        print(f"FAIL: structural stiffness {stats['stiffness'][0]} after a refused typed 25000 (expected 1000: "
+              "undone drag, refused value reverted)")
+        ok = False
+    if stats["stiffness"][1] != 700.0:
+        print(f"FAIL: shear stiffness {stats['stiffness'][1]} after typing 700 with a Backspace inside the field")
+        ok = False
+    if stats["generation"] != 2:
+        print(f"FAIL: {stats['generation'] - 1} rebuilds/resets; expected exactly 1 (the Backspace outside the "
+              "field; none from inside it)")
+        ok = False
+    return 0 if ok else 1
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--drape", required=True)
     ap.add_argument("--frames", type=int, default=30)
     ap.add_argument("--keep", help="copy the screenshot here")
+    ap.add_argument("--drive", action="store_true", help=argparse.SUPPRESS)  # inner run under xvfb-run
     args = ap.parse_args()
+    if args.drive:
+        return drive_input(args.drape)
 
     # The command line: bad flags exit 2 with one line naming the flag (and its range); no display exits 2 with
     # a hint to use xvfb-run, never a crash. None of these needs a display.
@@ -190,6 +296,24 @@ def main():
         os.makedirs(args.keep, exist_ok=True)
         shutil.copy(shot, os.path.join(args.keep, "viewer_smoke.png"))
     shutil.rmtree(tmp, ignore_errors=True)
+
+    # Input, driven by xdotool on the real window.
+    if not shutil.which("xdotool"):
+        print("FAIL: xdotool not found; scripts/setup.sh installs it (Debian package 'xdotool')")
+        return 1
+    cmd = [xvfb, "-a", "-s", "-screen 0 1600x1000x24", sys.executable, os.path.abspath(__file__), "--drape",
+           os.path.abspath(args.drape), "--drive"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=240, env=env)
+    sys.stdout.write(proc.stdout)
+    if proc.returncode != 0 and "the panel did not get the press" in proc.stdout:
+        # On a very busy machine the window may not have laid out its panels before the first press: once more.
+        print("retrying the input checks once (the first press found no panel)")
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=240, env=env)
+        sys.stdout.write(proc.stdout)
+    if proc.returncode != 0:
+        sys.stderr.write(proc.stderr[-4000:])
+        print("FAIL: viewer input checks")
+        return 1
     print("PASS: viewer smoke test")
     return 0
 
