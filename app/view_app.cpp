@@ -72,6 +72,7 @@ Viewer::Viewer(const ViewOptions& options) : options_(options) {
     show_ui_ = options.ui;
     scripted_mouse = options.demo_grab;
     full_mesh_ = options.full_mesh;
+    shading_.strain_colours = options.strain_colours;
     show_help_ = options.key_help;
     window_ = render::open_window(options.width, options.height, "drape - cloth viewer", true);
     glfwSwapInterval(options.vsync ? 1 : 0);
@@ -352,6 +353,7 @@ void Viewer::on_key(int key, int action, int mods) {
         if (mods & GLFW_MOD_CONTROL) glfwSetWindowShouldClose(window_, GLFW_TRUE);
         break;
     default:
+        tools_key(key);
         break;
     }
 }
@@ -471,6 +473,7 @@ int Viewer::run() {
         t0 = clock_type::now();
         const Simulation& sim = session_->sim();
         last_publish_ = session_->publisher().publish(sim.x(), sim.y(), sim.z(), region);
+        if (last_publish_.finite) publish_strain(region);
         t.publish = ms_since(t0);
         if (!last_publish_.finite) {
             // Cannot happen after a finite step (the core checks); never draw garbage if it does.
@@ -496,6 +499,7 @@ int Viewer::run() {
             pending_screenshot_.clear();
         }
         if (last_frame && !final_screenshot.empty()) save_screenshot(final_screenshot);
+        record_frame();
         const auto swap_start = clock_type::now();
         glfwSwapBuffers(window_);
         const auto now = clock_type::now();
@@ -543,13 +547,15 @@ int Viewer::run() {
         std::span<float> region = renderer_->begin_frame();
         const Simulation& sim = session_->sim();
         session_->publisher().publish(sim.x(), sim.y(), sim.z(), region);
+        publish_strain(region);
         draw_scene();
         ImGui::Render();
         ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
         save_screenshot(final_screenshot);
     }
+    const int tools_rc = finish_tools();
     if (options_.stats_json) print_stats_json();
-    return had_error_ ? 3 : 0;
+    return had_error_ ? 3 : tools_rc;
 }
 
 void Viewer::print_stats_json() const {
@@ -583,6 +589,7 @@ void Viewer::print_stats_json() const {
     j["max_strain"] = last_publish_.max_structural_strain;
     j["finite"] = last_publish_.finite && session_->error().empty();
     j["publish_path"] = session_->publisher().grid_path() ? "grid-simd" : "general";
+    j["strain_colours"] = shading_.strain_colours;
     j["triangles_drawn"] = renderer_->triangle_count();
     j["triangles"] = s.cloth().triangles.size() / 3;
     j["lod_stride"] = renderer_->lod_stride();

@@ -26,6 +26,7 @@
 #include "stage.hpp"
 #include "view_command.hpp"
 #include "view_session.hpp"
+#include "view_tools.hpp"
 
 struct GLFWwindow;
 
@@ -79,6 +80,17 @@ class Viewer {
     void update_hover();
     void start_grab(const PickHit& hit, double x, double y);
     void save_screenshot(const std::string& path);
+    // Tools (view_tools.cpp): strain colours, File panel, recording.
+    void publish_strain(std::span<float> region);
+    void ui_strain_controls();
+    void ui_strain_bar();
+    void ui_file_panel();
+    void export_obj(const std::string& path);
+    void start_recording(const std::string& target);
+    void stop_recording();
+    void record_frame();
+    bool tools_key(int key);
+    int finish_tools();
 
     ViewOptions options_;
     GLFWwindow* window_ = nullptr;
@@ -128,6 +140,7 @@ class Viewer {
     PublishStats last_publish_;
     bool had_error_ = false;
     std::string pending_screenshot_;
+    ToolsState tools_;
 };
 
 } // namespace drape::app

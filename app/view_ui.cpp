@@ -58,6 +58,7 @@ void Viewer::build_ui() {
         ui_panels();
         ui_overlay();
     }
+    ui_strain_bar();
     ui_messages();
     if (show_help_) ui_help();
 }
@@ -140,6 +141,7 @@ void Viewer::ui_panels() {
         ImGui::SliderFloat("specular", &shading_.specular, 0.0f, 1.0f, "%.2f", clamp_flags);
         ImGui::SliderFloat("shininess", &shading_.shininess, 1.0f, 512.0f, "%.0f", log_flags);
         ImGui::Checkbox("checker pattern", &shading_.checker);
+        ui_strain_controls();
     }
 
     // ---- Physics
@@ -234,6 +236,7 @@ void Viewer::ui_panels() {
         ImGui::TextDisabled("distance %.2f m, yaw %.0f deg, pitch %.0f deg", double(camera_.distance),
                             double(camera_.yaw) * 57.2958, double(camera_.pitch) * 57.2958);
     }
+    ui_file_panel();
     ImGui::Separator();
     ImGui::TextDisabled("F1: keys and mouse   Tab: hide panels");
     ImGui::PopItemWidth();
@@ -330,6 +333,8 @@ void Viewer::ui_help() {
         {"Backspace", "reset the cloth"},
         {"G", "ground grid on / off"},
         {"Tab", "panels on / off"},
+        {"C", "strain colours on / off"},
+        {"V", "record on / off (File panel: PNG frames or .mp4)"},
         {"F12", "screenshot drape_<time>.png"},
         {"Esc", "close this help / let go of the particle"},
         {"Ctrl+Q", "quit"},

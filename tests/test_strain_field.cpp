@@ -5,6 +5,7 @@
 // compute() allocates nothing.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -145,4 +146,51 @@ TEST(StrainField, RejectsShortSpans) {
     EXPECT_THROW(field.compute(s.x, s.y, s.z, out), InvalidInput);
     std::vector<float> ok(field.plane_floats());
     EXPECT_THROW(field.compute(std::span<const float>(s.x.data(), 10), s.y, s.z, ok), InvalidInput);
+}
+
+TEST(StrainField, HistogramCountsEveryVertexAndGivesQuantiles) {
+    // Bins: four per octave from 2^-14; exact bin edges land in the bin below.
+    EXPECT_EQ(StrainField::bin_of(0.0f), 0u);
+    EXPECT_EQ(StrainField::bin_of(std::ldexp(1.0f, -20)), 0u);
+    EXPECT_EQ(StrainField::bin_of(std::numeric_limits<float>::quiet_NaN()), StrainField::strain_bins - 1);
+    EXPECT_EQ(StrainField::bin_of(1e30f), StrainField::strain_bins - 1);
+    for (float v : {1e-4f, 0.003f, 0.05f, 0.5f, 2.0f}) {
+        const std::size_t b = StrainField::bin_of(v);
+        EXPECT_LT(v, StrainField::bin_upper(b)) << v;
+        EXPECT_GE(v, StrainField::bin_upper(b - 1)) << v;
+        // Linear within an octave (1, 1.25, 1.5, 1.75, 2): each bin 14 % to 25 % wide.
+        const float ratio = StrainField::bin_upper(b) / StrainField::bin_upper(b - 1);
+        EXPECT_GE(ratio, 1.14f) << v;
+        EXPECT_LE(ratio, 1.25f) << v;
+    }
+    // A stepped cloth: the histogram holds every vertex on both paths, the same counts at any worker count,
+    // and its quantiles bracket the reference's sorted strains.
+    SceneBuild scene = drape::testing::perturbed_hang(90, 0.4f, 0.0f, 3u);
+    Cloth general = scene.cloth;
+    general.grid.reset();
+    const auto& s = scene.initial;
+    std::vector<float> ref = reference_strain(scene.cloth, s.x, s.y, s.z);
+    std::sort(ref.begin(), ref.end());
+    std::vector<std::uint32_t> first;
+    for (const Cloth* cloth : {&scene.cloth, &general}) {
+        StrainField field(*cloth);
+        std::vector<float> out(field.plane_floats());
+        for (int workers : {1, 3}) {
+            Workers arena(workers);
+            arena.run([&] { return field.compute(s.x, s.y, s.z, out); });
+            const auto h = field.histogram();
+            std::uint64_t total = 0;
+            for (std::uint32_t c : h)
+                total += c;
+            EXPECT_EQ(total, cloth->particle_count);
+            if (first.empty()) first.assign(h.begin(), h.end());
+            EXPECT_TRUE(std::equal(h.begin(), h.end(), first.begin())) << workers << " workers";
+            for (double q : {0.5, 0.9, 0.99, 1.0}) {
+                const float v = field.quantile(q);
+                const std::size_t rank = static_cast<std::size_t>(std::ceil(q * double(ref.size()))) - 1;
+                EXPECT_LT(ref[rank], v) << q; // the q-quantile lies in the bin v closes
+                EXPECT_GE(ref[rank], v / 1.25f) << q;
+            }
+        }
+    }
 }

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 
 #include <tbb/blocked_range.h>
@@ -29,6 +30,9 @@ inline float spring_strain(float dx, float dy, float dz, float rest) noexcept {
 inline fbatch spring_strain(fbatch dx, fbatch dy, fbatch dz, fbatch rest) noexcept {
     return xsimd::abs(xsimd::sqrt(dx * dx + dy * dy + dz * dz) - rest) / rest;
 }
+
+constexpr std::uint32_t histogram_shift = 21;                     // keep sign, exponent, 2 mantissa bits
+constexpr std::uint32_t histogram_base = (127u - 14u) << 2;        // 2^-14 >> 21
 
 /// std::max's choice (the first argument unless the second is larger), spelled out so both paths agree.
 inline float larger(float a, float b) noexcept { return a < b ? b : a; }
@@ -91,6 +95,36 @@ StrainField::StrainField(const Cloth& cloth)
         }
     }
     block_max_.assign(block_count_, 0.0f);
+    block_histogram_.assign(block_count_ * strain_bins, 0);
+    histogram_.assign(strain_bins, 0);
+}
+
+std::size_t StrainField::bin_of(float strain) noexcept {
+    std::uint32_t bits;
+    std::memcpy(&bits, &strain, sizeof bits);
+    const std::uint32_t key = (bits & 0x7fffffffu) >> histogram_shift; // |strain|; NaN and inf: top bin
+    return key <= histogram_base ? 0 : std::min<std::size_t>(key - histogram_base, strain_bins - 1);
+}
+
+float StrainField::bin_upper(std::size_t bin) noexcept {
+    const std::uint32_t bits = static_cast<std::uint32_t>(histogram_base + bin + 1) << histogram_shift;
+    float v;
+    std::memcpy(&v, &bits, sizeof v);
+    return v;
+}
+
+float StrainField::quantile(double q) const noexcept {
+    std::uint64_t total = 0;
+    for (std::uint32_t c : histogram_)
+        total += c;
+    if (total == 0) return 0.0f;
+    const double want = std::clamp(q, 0.0, 1.0) * double(total);
+    std::uint64_t seen = 0;
+    for (std::size_t b = 0; b < strain_bins; ++b) {
+        seen += histogram_[b];
+        if (double(seen) >= want && seen > 0) return bin_upper(b);
+    }
+    return bin_upper(strain_bins - 1);
 }
 
 float StrainField::compute(std::span<const float> x, std::span<const float> y, std::span<const float> z,
@@ -131,8 +165,13 @@ float StrainField::compute_impl(std::span<const float> x, std::span<const float>
             run_block(b);
     }
     float result = 0.0f;
-    for (std::size_t b = 0; b < block_count_; ++b)
+    std::fill(histogram_.begin(), histogram_.end(), 0u);
+    for (std::size_t b = 0; b < block_count_; ++b) {
         result = larger(result, block_max_[b]);
+        const std::uint32_t* h = block_histogram_.data() + b * strain_bins;
+        for (std::size_t i = 0; i < strain_bins; ++i)
+            histogram_[i] += h[i];
+    }
     return result;
 }
 
@@ -159,12 +198,17 @@ void StrainField::block_grid(std::size_t block, Positions p, float* out) noexcep
     float block_max = 0.0f;
     fbatch max_v(0.0f);
     const fbatch zero(0.0f), rest_e(rest_east_), rest_s(rest_south_);
+    std::uint32_t* histogram = block_histogram_.data() + block * strain_bins;
+    std::fill(histogram, histogram + strain_bins, 0u);
+    alignas(64) float lanes[W];
     for (std::size_t k = begin; k < end; k += W) {
         // SIMD when every lane's four neighbours are inside the arrays.
         if (k < columns || k + W + columns > particle_count_) {
             for (std::size_t l = k; l < k + W; ++l) {
-                out[l] = grid_vertex_scalar(l, p);
-                block_max = larger(block_max, out[l]);
+                const float s = grid_vertex_scalar(l, p);
+                out[l] = s;
+                block_max = larger(block_max, s);
+                if (l < particle_count_) ++histogram[bin_of(s)];
             }
             continue;
         }
@@ -183,8 +227,10 @@ void StrainField::block_grid(std::size_t block, Positions p, float* out) noexcep
         side(north_bit, k - columns, rest_s);
         s.store_unaligned(out + k);
         max_v = simd::select(max_v < s, s, max_v);
+        s.store_aligned(lanes); // every lane is a real vertex here (k + W <= particle_count - columns)
+        for (float v : lanes)
+            ++histogram[bin_of(v)];
     }
-    alignas(64) float lanes[W];
     max_v.store_aligned(lanes);
     for (float v : lanes)
         block_max = larger(block_max, v);
@@ -196,6 +242,8 @@ void StrainField::block_general(std::size_t block, Positions p, float* out) noex
     const std::size_t end = std::min(begin + block_particles, plane_floats_);
     const std::size_t real_end = std::min(end, particle_count_);
     float block_max = 0.0f;
+    std::uint32_t* histogram = block_histogram_.data() + block * strain_bins;
+    std::fill(histogram, histogram + strain_bins, 0u);
     for (std::size_t k = begin; k < real_end; ++k) {
         const float px = p.x[k], py = p.y[k], pz = p.z[k];
         float s = 0.0f;
@@ -205,6 +253,7 @@ void StrainField::block_general(std::size_t block, Positions p, float* out) noex
         }
         out[k] = s;
         block_max = larger(block_max, s);
+        ++histogram[bin_of(s)];
     }
     for (std::size_t k = real_end; k < end; ++k)
         out[k] = 0.0f;

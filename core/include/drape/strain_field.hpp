@@ -19,6 +19,12 @@
 // Every vertex gathers its own springs (no scatter), the maximum is exact whatever the order, and blocks
 // are fixed (block_particles), so the output is bitwise the same at any thread count. Cooked once;
 // compute() allocates nothing.
+//
+// On the way compute() also counts the vertices in a histogram of strain_bins bins, four per octave from
+// 2^-14 (0.006 %) up (the float's exponent and two leading mantissa bits: no log; bins 14 % to 25 %
+// wide), per block, summed in
+// block order. quantile() reads it: the viewer's automatic colour scale follows the 99th percentile, so one
+// overstretched spring at a grabbed particle does not turn the rest of the cloth blue.
 #pragma once
 
 #include <cstddef>
@@ -52,6 +58,17 @@ class StrainField {
     float compute_serial(std::span<const float> x, std::span<const float> y, std::span<const float> z,
                          std::span<float> out);
 
+    static constexpr std::size_t strain_bins = 80;
+    /// Bin of a strain value (0 for anything below 2^-14, the last bin for anything above ~2^5.75 and NaN).
+    static std::size_t bin_of(float strain) noexcept;
+    /// Upper edge of a bin (strain, dimensionless).
+    static float bin_upper(std::size_t bin) noexcept;
+    /// Vertices per bin over the whole cloth, from the last compute().
+    std::span<const std::uint32_t> histogram() const noexcept { return histogram_; }
+    /// The upper edge of the bin holding the q-quantile (0 < q <= 1) of the last compute()'s strains: at
+    /// least a fraction q of the vertices has a strain at most this (within one bin, 14 % to 25 % wide).
+    float quantile(double q) const noexcept;
+
   private:
     struct Positions {
         const float* x;
@@ -82,6 +99,8 @@ class StrainField {
     std::vector<float> rest_; ///< m
 
     std::vector<float> block_max_; ///< per-block partials, combined in block order (sized once)
+    std::vector<std::uint32_t> block_histogram_; ///< block_count x strain_bins (sized once)
+    std::vector<std::uint32_t> histogram_;       ///< strain_bins
 };
 
 } // namespace drape
