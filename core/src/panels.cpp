@@ -94,6 +94,50 @@ std::size_t GarmentAssembly::edge_count(SpringKind kind) const noexcept {
         std::count_if(edges.begin(), edges.end(), [kind](const Edge& e) { return e.kind == kind; }));
 }
 
+
+void add_triangle_springs(GarmentAssembly& io, std::span<const std::uint32_t> triangles) {
+    struct HalfEdge {
+        std::uint64_t key;
+        std::uint32_t opposite;
+    };
+    std::vector<HalfEdge> half;
+    half.reserve(triangles.size());
+    for (std::size_t t = 0; t + 2 < triangles.size(); t += 3)
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t a = triangles[t + k], b = triangles[t + (k + 1) % 3], c = triangles[t + (k + 2) % 3];
+            half.push_back({pair_key(a, b), c});
+        }
+    std::sort(half.begin(), half.end(), [](const HalfEdge& l, const HalfEdge& r) {
+        return l.key != r.key ? l.key < r.key : l.opposite < r.opposite;
+    });
+    auto dist = [&](std::uint32_t a, std::uint32_t b) {
+        const double dx = double{io.x[a]} - io.x[b], dy = double{io.y[a]} - io.y[b],
+                     dz = double{io.z[a]} - io.z[b];
+        return static_cast<float>(std::sqrt(dx * dx + dy * dy + dz * dz));
+    };
+    std::unordered_set<std::uint64_t> joined;
+    joined.reserve(half.size());
+    std::vector<std::uint64_t> cross;
+    for (std::size_t k = 0; k < half.size();) {
+        std::size_t m = k;
+        while (m < half.size() && half[m].key == half[k].key)
+            ++m;
+        const auto a = static_cast<std::uint32_t>(half[k].key >> 32);
+        const auto b = static_cast<std::uint32_t>(half[k].key & 0xffffffffu);
+        io.edges.push_back({a, b, SpringKind::structural, dist(a, b)});
+        joined.insert(half[k].key);
+        if (m - k == 2 && half[k].opposite != half[k + 1].opposite)
+            cross.push_back(pair_key(half[k].opposite, half[k + 1].opposite));
+        k = m;
+    }
+    for (std::uint64_t key : cross) {
+        if (!joined.insert(key).second) continue;
+        const auto a = static_cast<std::uint32_t>(key >> 32);
+        const auto b = static_cast<std::uint32_t>(key & 0xffffffffu);
+        io.edges.push_back({a, b, SpringKind::bend, dist(a, b)});
+    }
+}
+
 // ---------------------------------------------------------------------------------------------------------------------
 // Mask panels
 
@@ -915,50 +959,8 @@ OutlinePanelBuild add_outline_panel(GarmentAssembly& io, const OutlinePanel& pan
         io.triangles.push_back(static_cast<std::uint32_t>(particle[v]));
     out.triangle_count = kept.size() / 3;
 
-    // Springs: one structural per triangle edge; one bend across each edge shared by two triangles, joining
-    // the two opposite vertices.
-    struct HalfEdge {
-        std::uint64_t key;
-        std::uint32_t opposite;
-    };
-    std::vector<HalfEdge> half;
-    half.reserve(kept.size());
-    for (std::size_t t = 0; t < kept.size(); t += 3)
-        for (int k = 0; k < 3; ++k) {
-            const auto a = static_cast<std::uint32_t>(particle[kept[t + k]]);
-            const auto b = static_cast<std::uint32_t>(particle[kept[t + (k + 1) % 3]]);
-            const auto c = static_cast<std::uint32_t>(particle[kept[t + (k + 2) % 3]]);
-            half.push_back({pair_key(a, b), c});
-        }
-    std::sort(half.begin(), half.end(), [](const HalfEdge& l, const HalfEdge& r) {
-        return l.key != r.key ? l.key < r.key : l.opposite < r.opposite;
-    });
-    auto dist = [&](std::uint32_t a, std::uint32_t b) {
-        const double dx = double{io.x[a]} - io.x[b], dy = double{io.y[a]} - io.y[b],
-                     dz = double{io.z[a]} - io.z[b];
-        return static_cast<float>(std::sqrt(dx * dx + dy * dy + dz * dz));
-    };
     out.first_edge = io.edges.size();
-    std::unordered_set<std::uint64_t> joined;
-    joined.reserve(half.size());
-    std::vector<std::uint64_t> cross;
-    for (std::size_t k = 0; k < half.size();) {
-        std::size_t m = k;
-        while (m < half.size() && half[m].key == half[k].key)
-            ++m;
-        const auto a = static_cast<std::uint32_t>(half[k].key >> 32);
-        const auto b = static_cast<std::uint32_t>(half[k].key & 0xffffffffu);
-        io.edges.push_back({a, b, SpringKind::structural, dist(a, b)});
-        joined.insert(half[k].key);
-        if (m - k == 2) cross.push_back(pair_key(half[k].opposite, half[k + 1].opposite));
-        k = m;
-    }
-    for (std::uint64_t key : cross) {
-        if (!joined.insert(key).second) continue;
-        const auto a = static_cast<std::uint32_t>(key >> 32);
-        const auto b = static_cast<std::uint32_t>(key & 0xffffffffu);
-        io.edges.push_back({a, b, SpringKind::bend, dist(a, b)});
-    }
+    add_triangle_springs(io, std::span<const std::uint32_t>(io.triangles).subspan(out.first_triangle * 3));
     out.edge_count = io.edges.size() - out.first_edge;
     return out;
 }

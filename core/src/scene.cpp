@@ -3,6 +3,7 @@
 #include "drape/scene.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -42,6 +43,7 @@ class ObjectReader {
     }
     std::string at(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
     bool has(const std::string& key) const { return j_.contains(key); }
+    bool has_array(const std::string& key) const { return j_.contains(key) && j_[key].is_array(); }
 
     double number(const std::string& key, double lo, double hi, const char* unit, double fallback) {
         seen_.insert(key);
@@ -168,6 +170,91 @@ Collider read_collider(ObjectReader& r) {
     return c;
 }
 
+
+/// cloth.type = "mesh": the fields, then the OBJ file (read here, so a broken file is an input error at load).
+void read_mesh_cloth(ObjectReader& cloth, const std::string& base_dir, SceneSpec& s) {
+    MeshClothSpec& m = s.mesh;
+    const std::string file = cloth.text("file", {}, "");
+    if (file.empty()) cloth.fail(cloth.at("file"), "is required: the OBJ file, relative to the scene file's directory");
+    m.density = static_cast<float>(cloth.number("density", 1e-3, 10.0, " kg/m^2", m.density));
+    m.scale = static_cast<float>(cloth.number("scale", 1e-4, 1e4, "", m.scale));
+    m.centre = cloth.vec3("centre", 1000.0, " m", m.centre);
+    const std::filesystem::path resolved =
+        (base_dir.empty() ? std::filesystem::path(file) : std::filesystem::path(base_dir) / file).lexically_normal();
+    try {
+        m.mesh = std::make_shared<const TriangleMesh>(load_obj_mesh(resolved.string()));
+    } catch (const InvalidInput& e) {
+        cloth.fail(cloth.at("file") + " \"" + file + "\":", e.what());
+    }
+    m.file = std::filesystem::absolute(resolved).lexically_normal().string();
+    const std::size_t vertices = m.mesh->obj_vertices();
+    if (cloth.has_array("pins")) {
+        const json* list = cloth.array("pins", vertices);
+        m.pins = MeshPins::list;
+        for (std::size_t k = 0; k < list->size(); ++k) {
+            const json& v = (*list)[k];
+            const std::string where = cloth.at("pins") + "[" + std::to_string(k) + "]";
+            if (!v.is_number_unsigned() || v.get<std::uint64_t>() >= vertices)
+                cloth.fail(where, "must be an OBJ vertex index in [0, " + std::to_string(vertices - 1) +
+                                      "] (0-based, file order)");
+            const auto i = v.get<std::uint32_t>();
+            if (m.mesh->particle_of_vertex[i] < 0)
+                cloth.fail(where, "= " + std::to_string(i) + " is a vertex in no triangle (dropped from the cloth)");
+            m.pin_vertices.push_back(i);
+        }
+    } else {
+        const std::string pins = cloth.text("pins", {"none", "top"}, "none");
+        m.pins = pins == "top" ? MeshPins::top : MeshPins::none;
+    }
+    const std::string note = m.mesh->cleaning_note();
+    if (!note.empty()) s.warnings.push_back(cloth.source() + ": cloth.file \"" + file + "\": " + note);
+}
+
+inline constexpr double state_limit = 1e6; ///< |position| (m) and |velocity| (m/s) in a saved state
+
+/// The "state" section: positions and velocities ([x, y, z] per particle) and the pinned particles. Counts are
+/// checked against the cloth in build_scene (the cloth is not built yet).
+SceneState read_state(ObjectReader& st) {
+    SceneState out;
+    const std::size_t max_particles = std::size_t{1} << 24;
+    auto triples = [&](const char* key, std::vector<float>& x, std::vector<float>& y, std::vector<float>& z,
+                       const char* unit) {
+        const json* list = st.array(key, max_particles);
+        if (!list) st.fail(st.at(key), "is required: one [x, y, z] per particle");
+        x.resize(list->size());
+        y.resize(list->size());
+        z.resize(list->size());
+        for (std::size_t i = 0; i < list->size(); ++i) {
+            const json& v = (*list)[i];
+            if (!v.is_array() || v.size() != 3)
+                st.fail(st.at(key) + "[" + std::to_string(i) + "]", "must be [x, y, z], three numbers");
+            float* dst[3] = {&x[i], &y[i], &z[i]};
+            for (int k = 0; k < 3; ++k) {
+                const double d = v[k].is_number() ? v[k].get<double>() : std::nan("");
+                if (!(std::fabs(d) <= state_limit))
+                    st.fail(st.at(key) + "[" + std::to_string(i) + "][" + std::to_string(k) + "]",
+                            "must be a finite number in [-1e+06, 1e+06]" + std::string(unit));
+                *dst[k] = static_cast<float>(d);
+            }
+        }
+    };
+    triples("positions", out.x, out.y, out.z, " m");
+    triples("velocities", out.vx, out.vy, out.vz, " m/s");
+    if (out.vx.size() != out.x.size())
+        st.fail(st.at("velocities"), "has " + std::to_string(out.vx.size()) + " entries; state.positions has " +
+                                         std::to_string(out.x.size()));
+    const json* pinned = st.array("pinned", max_particles);
+    if (!pinned) st.fail(st.at("pinned"), "is required: the pinned particles' indices ([] for none)");
+    for (std::size_t k = 0; k < pinned->size(); ++k) {
+        const json& v = (*pinned)[k];
+        if (!v.is_number_unsigned() || v.get<std::uint64_t>() >= out.x.size())
+            st.fail(st.at("pinned") + "[" + std::to_string(k) + "]",
+                    "must be a particle index in [0, " + std::to_string(out.x.size()) + ")");
+        out.pinned.push_back(v.get<std::uint32_t>());
+    }
+    st.finish();
+    return out;
+}
 } // namespace
 
 std::vector<std::string> builtin_scene_names() {
@@ -176,7 +263,7 @@ std::vector<std::string> builtin_scene_names() {
     return out;
 }
 
-SceneSpec parse_scene(const std::string& text, const std::string& source) {
+SceneSpec parse_scene(const std::string& text, const std::string& source, const std::string& base_dir) {
     if (text.size() > (std::size_t{16} << 20)) throw InvalidInput(source + ": file is larger than 16 MiB");
     json doc;
     try {
@@ -191,9 +278,14 @@ SceneSpec parse_scene(const std::string& text, const std::string& source) {
 
     // cloth
     ObjectReader cloth = root.object("cloth");
-    const std::string type = cloth.text("type", {"grid", "tshirt", "outline"}, "grid");
-    s.cloth = type == "tshirt" ? ClothType::tshirt : type == "outline" ? ClothType::outline : ClothType::grid;
-    if (s.cloth == ClothType::outline) {
+    const std::string type = cloth.text("type", {"grid", "tshirt", "outline", "mesh"}, "grid");
+    s.cloth = type == "tshirt"    ? ClothType::tshirt
+              : type == "outline" ? ClothType::outline
+              : type == "mesh"    ? ClothType::mesh
+                                  : ClothType::grid;
+    if (s.cloth == ClothType::mesh) {
+        read_mesh_cloth(cloth, base_dir, s);
+    } else if (s.cloth == ClothType::outline) {
         OutlineClothSpec& o = s.outline;
         const json* pts = cloth.array("outline", 4096);
         if (!pts || pts->size() < 3) cloth.fail(cloth.at("outline"), "must list 3 to 4096 [u, v] vertices (m)");
@@ -304,6 +396,10 @@ SceneSpec parse_scene(const std::string& text, const std::string& source) {
         }
     }
     s.body = root.boolean("body", false);
+    if (root.has("state")) {
+        ObjectReader st = root.object("state");
+        s.state = read_state(st);
+    }
 
     root.finish();
 
@@ -333,11 +429,12 @@ SceneSpec load_scene(const std::string& name_or_path) {
     in.seekg(0);
     std::string text(static_cast<std::size_t>(size), '\0');
     in.read(text.data(), size);
-    return parse_scene(text, name_or_path);
+    return parse_scene(text, name_or_path, std::filesystem::path(name_or_path).parent_path().string());
 }
 
 std::size_t scene_particle_count(const SceneSpec& s) {
     if (s.cloth == ClothType::grid) return std::size_t{s.grid.n} * s.grid.n;
+    if (s.cloth == ClothType::mesh) return s.mesh.mesh ? s.mesh.mesh->particle_count() : 0;
     if (s.cloth == ClothType::outline) { // bounding box / spacing^2, per panel (an upper bound)
         double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
         for (const auto& v : s.outline.outline.outline)
@@ -349,6 +446,53 @@ std::size_t scene_particle_count(const SceneSpec& s) {
     const double r = s.tshirt.cells_per_metre;
     return static_cast<std::size_t>(0.8 * r * r) + 64; // the mask's area is ~0.39 m^2 per panel (panels.hpp)
 }
+
+namespace {
+
+/// Cooks an assembly (outline and mesh cloths): stiffness per kind as for the other cloths; the damping ratio uses
+/// the mean particle mass.
+void cook_assembly(const SceneSpec& s, const GarmentAssembly& a, const std::vector<float>& inv_mass,
+                   const std::vector<float>& free_inv_mass, BuiltScene& out) {
+    double total = 0.0;
+    for (float m : a.mass) total += m;
+    const float mean_mass = float(total / double(std::max<std::size_t>(1, a.particle_count())));
+    std::array<SpringMaterial, spring_kind_count> material{};
+    const float ks[4] = {s.stiffness, s.stiffness * s.shear_ratio, s.stiffness * s.bend_ratio, s.seam_stiffness};
+    for (int kind = 0; kind < 4; ++kind)
+        material[kind] = {ks[kind], s.damping_ratio * 2.0f * std::sqrt(ks[kind] * mean_mass * 0.5f)};
+    out.cloth = cook_cloth(inv_mass, a.edges, material);
+    out.cloth.triangles = a.triangles;
+    out.cloth.free_inv_mass = free_inv_mass;
+    out.initial = a.initial_state();
+}
+
+/// A saved state replaces the initial state and the pins (after dt is chosen, so the default dt is that of the
+/// scene's own pins, as when the state was saved).
+void apply_state(const SceneState& st, BuiltScene& out) {
+    Cloth& c = out.cloth;
+    const std::size_t n = c.particle_count;
+    if (st.x.size() != n)
+        throw InvalidInput("state.positions has " + std::to_string(st.x.size()) + " entries but the cloth has " +
+                           std::to_string(n) + " particles");
+    if (st.vx.size() != n)
+        throw InvalidInput("state.velocities has " + std::to_string(st.vx.size()) + " entries but the cloth has " +
+                           std::to_string(n) + " particles");
+    for (std::uint32_t i : st.pinned)
+        if (i >= n)
+            throw InvalidInput("state.pinned names particle " + std::to_string(i) + "; the cloth has " +
+                               std::to_string(n) + " particles");
+    if (c.free_inv_mass.size() != n) c.free_inv_mass.assign(c.inv_mass.begin(), c.inv_mass.begin() + n);
+    for (std::size_t i = 0; i < n; ++i) c.inv_mass[i] = c.free_inv_mass[i];
+    for (std::uint32_t i : st.pinned) c.inv_mass[i] = 0.0f;
+    out.initial.x = st.x;
+    out.initial.y = st.y;
+    out.initial.z = st.z;
+    out.initial.vx = st.vx;
+    out.initial.vy = st.vy;
+    out.initial.vz = st.vz;
+}
+
+} // namespace
 
 BuiltScene build_scene(const SceneSpec& s) {
     BuiltScene out;
@@ -399,18 +543,18 @@ BuiltScene build_scene(const SceneSpec& s) {
             for (std::size_t i = 0; i < a.particle_count(); ++i)
                 if ((vertical ? a.y[i] : a.z[i]) >= top - 0.25f * o.spacing) inv_mass[i] = 0.0f;
         }
-        // Material: stiffness per kind as for the other cloths; the damping ratio uses the mean particle mass.
-        double total = 0.0;
-        for (float m : a.mass) total += m;
-        const float mean_mass = float(total / double(std::max<std::size_t>(1, a.particle_count())));
-        std::array<SpringMaterial, spring_kind_count> material{};
-        const float ks[4] = {s.stiffness, s.stiffness * s.shear_ratio, s.stiffness * s.bend_ratio, s.seam_stiffness};
-        for (int kind = 0; kind < 4; ++kind)
-            material[kind] = {ks[kind], s.damping_ratio * 2.0f * std::sqrt(ks[kind] * mean_mass * 0.5f)};
-        out.cloth = cook_cloth(inv_mass, a.edges, material);
-        out.cloth.triangles = a.triangles;
-        out.cloth.free_inv_mass = free_inv_mass;
-        out.initial = a.initial_state();
+        cook_assembly(s, a, inv_mass, free_inv_mass, out);
+    } else if (s.cloth == ClothType::mesh) {
+        const MeshClothSpec& m = s.mesh;
+        if (!m.mesh) throw InvalidInput("mesh cloth: no mesh loaded (cloth.file)");
+        GarmentAssembly a;
+        add_mesh_panel(a, *m.mesh, {m.scale, m.centre, m.density});
+        std::vector<float> inv_mass = a.inverse_masses();
+        const std::vector<float> free_inv_mass = inv_mass;
+        if (m.pins == MeshPins::top)
+            for (std::uint32_t i : mesh_top_particles(*m.mesh)) inv_mass[i] = 0.0f;
+        for (std::uint32_t v : m.pin_vertices) inv_mass[static_cast<std::size_t>(m.mesh->particle_of_vertex.at(v))] = 0.0f;
+        cook_assembly(s, a, inv_mass, free_inv_mass, out);
     } else {
         const TShirtBuild t = build_tshirt(s.tshirt);
         const GarmentAssembly& a = t.assembly;
@@ -429,6 +573,7 @@ BuiltScene build_scene(const SceneSpec& s) {
         out.params.colliders.insert(out.params.colliders.end(), body.begin(), body.end());
     }
     out.params.dt = s.dt ? *s.dt : static_cast<float>(default_dt(out.cloth, out.params.air_drag));
+    if (s.state) apply_state(*s.state, out);
     return out;
 }
 

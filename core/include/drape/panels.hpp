@@ -57,6 +57,13 @@ struct PanelFrame {
     std::array<float, 3> axis_v{0.0f, -1.0f, 0.0f};
 };
 
+/// Springs of a triangle mesh already in the assembly (seed 001's rule): a structural spring on every edge of
+/// `triangles` (assembly particle indices, 3 per triangle); a bend spring joining the two opposite vertices of every
+/// edge shared by exactly two triangles (an edge of 3+ triangles, non-manifold, gets none; a pair already joined by
+/// these springs, or the same vertex twice, is skipped). Structural springs first, in (a, b) order, then the bend
+/// springs; rest lengths = current distances.
+void add_triangle_springs(GarmentAssembly& io_assembly, std::span<const std::uint32_t> triangles);
+
 // ---------------------------------------------------------------------------------------------------------------------
 // Mask panels (seed 000 section 1.4)
 

@@ -5,18 +5,20 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "drape/colliders.hpp"
+#include "drape/mesh_cloth.hpp"
 #include "drape/panels.hpp"
 #include "drape/scene_hang.hpp"
 #include "drape/simulation.hpp"
 
 namespace drape {
 
-enum class ClothType : std::uint8_t { grid, tshirt, outline };
+enum class ClothType : std::uint8_t { grid, tshirt, outline, mesh };
 
 /// cloth.type = "outline": a panel cut from an outline polygon (seed 004: filled, Delaunay-triangulated), optionally
 /// with an identical second panel `gap` behind it, sewn to it along outline stretches (a bag, a pillow).
@@ -33,6 +35,27 @@ struct OutlineClothSpec {
     float seam_rest_ratio = 0.5f;    ///< seam rest length / spacing
 };
 
+/// cloth.type = "mesh": an arbitrary triangle mesh read from an OBJ file (core/include/drape/mesh_cloth.hpp). The
+/// file is read by parse_scene (so a broken file is an input error at load time); building scales the mesh about
+/// its bounding-box centre and moves that centre to `centre`.
+enum class MeshPins : std::uint8_t { none, top, list };
+struct MeshClothSpec {
+    std::string file;              ///< the OBJ file, resolved (absolute, normalised); the scene file may give it relative
+    float density = 0.15f;         ///< kg/m^2; a particle gets 1/3 of its triangles' area times it
+    float scale = 1.0f;            ///< applied about the bounding-box centre
+    std::array<float, 3> centre{0.0f, 0.0f, 0.0f}; ///< where the mesh's bounding-box centre goes, m
+    MeshPins pins = MeshPins::none;
+    std::vector<std::uint32_t> pin_vertices; ///< pins = list: OBJ vertex indices (0-based)
+    std::shared_ptr<const TriangleMesh> mesh; ///< what the file holds (cleaned), shared between copies of the spec
+};
+
+/// A simulation state saved with a scene (the "state" section): positions (m) and velocities (m/s) per particle, and
+/// the pinned particles. build_scene starts from it: its pins replace the scene's own.
+struct SceneState {
+    std::vector<float> x, y, z, vx, vy, vz;
+    std::vector<std::uint32_t> pinned;
+};
+
 /// Everything a scene file holds (cold tier). Defaults are those of "hang".
 struct SceneSpec {
     std::string name = "hang";
@@ -41,20 +64,25 @@ struct SceneSpec {
     HangParams grid;      ///< cloth.type = "grid" (n, size, mass, plane, centre, pins, material)
     TShirtParams tshirt;  ///< cloth.type = "tshirt"
     OutlineClothSpec outline; ///< cloth.type = "outline"
+    MeshClothSpec mesh;       ///< cloth.type = "mesh"
     /// Material (N/m; damping as a fraction of critical, like HangParams).
     float stiffness = 1000.0f, shear_ratio = 0.5f, bend_ratio = 0.1f, damping_ratio = 0.05f;
     float seam_stiffness = 1000.0f; ///< N/m, seam springs (tshirt)
     SimulationParams physics;       ///< gravity, drag, integrator, wind, strain limit, colliders (dt: see below)
     std::optional<float> dt;        ///< s; absent = 0.9 x the stability bound
     bool body = false;              ///< add default_body() colliders (tshirt)
+    std::optional<SceneState> state; ///< the "state" section: where the simulation starts (absent = the cloth at rest)
+    /// Notes from loading that are not errors (e.g. degenerate triangles dropped from a mesh); the caller shows them.
+    std::vector<std::string> warnings;
 };
 
 /// Names of the built-in scenes, in a fixed order: hang, drape, sphere, flag, tshirt.
 std::vector<std::string> builtin_scene_names();
 
 /// Parses and validates scene JSON. `source` names the file in messages. Throws InvalidInput naming the source, the
-/// field as a JSON path (e.g. "cloth.n") and the allowed range; unknown fields are errors.
-SceneSpec parse_scene(const std::string& json_text, const std::string& source);
+/// field as a JSON path (e.g. "cloth.n") and the allowed range; unknown fields are errors. Relative file names in the
+/// scene (cloth.file) are resolved against `base_dir` (empty: the current directory); a mesh cloth's OBJ is read here.
+SceneSpec parse_scene(const std::string& json_text, const std::string& source, const std::string& base_dir = "");
 
 /// A built-in scene by name, or a scene file by path (anything ending in .json). Throws InvalidInput (unknown name,
 /// missing or unreadable file, or any parse error).
@@ -66,7 +94,9 @@ struct BuiltScene {
     SimulationParams params; ///< dt filled in (the scene's or the default)
 };
 
-/// Cooks a scene. Sizes are checked before anything is allocated.
+/// Cooks a scene. Sizes are checked before anything is allocated. With a state, the initial state is the saved one
+/// and its pins replace the scene's (the default dt is still that of the scene's own pins, as when it was saved);
+/// throws InvalidInput when the state's counts do not match the cloth (naming state.positions and both counts).
 BuiltScene build_scene(const SceneSpec& spec);
 
 /// Particle count a spec will have, computed without building it (to refuse absurd sizes early).
