@@ -3,6 +3,7 @@
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -28,6 +29,16 @@ std::string shell_quote(const std::string& s) {
             q += c;
     }
     return q + "'";
+}
+
+/// The last non-empty line of a text file ("" when there is none), without the trailing newline.
+std::string last_line(const std::string& path) {
+    if (path.empty()) return {};
+    std::ifstream in(path);
+    std::string line, last;
+    while (std::getline(in, line))
+        if (!line.empty()) last = line;
+    return last;
 }
 
 } // namespace
@@ -64,11 +75,23 @@ FrameRecorder::FrameRecorder(std::string target, int width, int height)
             throw InvalidInput("record: cannot write '" + target_ + "': no directory '" + parent.string() + "'");
         // ffmpeg exiting early must not kill the viewer with SIGPIPE: writes then fail with EPIPE instead.
         std::signal(SIGPIPE, SIG_IGN);
+        // ffmpeg's own messages go to a log file, so a failure is reported as one line naming the target.
+        std::string log = (std::filesystem::temp_directory_path() / "drape-ffmpeg-XXXXXX").string();
+        const int fd = ::mkstemp(log.data());
+        if (fd >= 0) {
+            ::close(fd);
+            ffmpeg_log_ = log;
+        }
         const std::string command = "ffmpeg -loglevel error -nostats -y -f rawvideo -pix_fmt rgb24 -s " +
                                     std::to_string(width_) + "x" + std::to_string(height_) +
-                                    " -r 60 -i - -pix_fmt yuv420p " + shell_quote(target_);
+                                    " -r 60 -i - -pix_fmt yuv420p " + shell_quote(target_) +
+                                    (ffmpeg_log_.empty() ? "" : " 2>" + shell_quote(ffmpeg_log_));
         pipe_ = ::popen(command.c_str(), "w");
-        if (!pipe_) throw InvalidInput("record: cannot start ffmpeg for '" + target_ + "'");
+        if (!pipe_) {
+            std::error_code ec;
+            if (!ffmpeg_log_.empty()) std::filesystem::remove(ffmpeg_log_, ec);
+            throw InvalidInput("record: cannot start ffmpeg for '" + target_ + "'");
+        }
     } else {
         std::error_code ec;
         std::filesystem::create_directories(target_, ec);
@@ -144,7 +167,7 @@ void FrameRecorder::writer_loop() {
 void FrameRecorder::write_frame(const std::vector<unsigned char>& rgb, std::size_t index) {
     if (video_) {
         if (std::fwrite(rgb.data(), 1, rgb.size(), pipe_) != rgb.size())
-            throw std::runtime_error("cannot write '" + target_ + "': ffmpeg stopped reading (see its message above)");
+            throw std::runtime_error("cannot write '" + target_ + "': ffmpeg stopped reading");
         return;
     }
     char name[32];
@@ -166,12 +189,18 @@ std::string FrameRecorder::finish() {
         const int status = ::pclose(pipe_);
         pipe_ = nullptr;
         std::lock_guard lock(mutex_);
-        if (error_.empty() && status != 0) {
+        const std::string said = last_line(ffmpeg_log_);
+        if (status != 0 || !error_.empty()) {
             const int code = status > 0 && WIFEXITED(status) ? WEXITSTATUS(status) : status;
-            error_ = "ffmpeg failed writing '" + target_ + "' (exit status " + std::to_string(code) + ")";
-        } else if (error_.empty() && written_ == 0) {
+            error_ = "cannot write '" + target_ + "': ffmpeg " +
+                     (said.empty() ? "exited with status " + std::to_string(code) : "said: " + said);
+        } else if (written_ == 0) {
             error_ = "no frames recorded to '" + target_ + "'";
         }
+    }
+    if (!ffmpeg_log_.empty()) {
+        std::error_code ec;
+        std::filesystem::remove(ffmpeg_log_, ec);
     }
     std::lock_guard lock(mutex_);
     return error_;

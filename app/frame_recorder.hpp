@@ -63,6 +63,7 @@ class FrameRecorder {
     bool video_ = false;
     int width_ = 0, height_ = 0;
     std::FILE* pipe_ = nullptr;
+    std::string ffmpeg_log_; ///< ffmpeg's stderr (a temp file, removed by finish())
     std::vector<std::vector<unsigned char>> slots_;
     std::vector<std::vector<unsigned char>*> free_;
     std::deque<std::vector<unsigned char>*> queued_;

@@ -144,6 +144,8 @@ int main(int argc, char** argv) {
                          "Record from the first frame: a directory (PNG frames) or FILE.mp4 (needs ffmpeg)")
         ->group("");
     view_cmd->add_option("--save-obj", view.save_obj, "At exit, export the last frame as this OBJ file")->group("");
+    view_cmd->add_option("--save-scene", view.save_scene, "At exit, save the scene and its state to this file")
+        ->group("");
 
     auto is_command = [&](const std::string& name) {
         for (const CLI::App* sub : app.get_subcommands({}))

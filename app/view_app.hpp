@@ -86,6 +86,7 @@ class Viewer {
     void ui_strain_bar();
     void ui_file_panel();
     void export_obj(const std::string& path);
+    void save_scene_file(const std::string& path, bool with_state);
     void start_recording(const std::string& target);
     void stop_recording();
     void record_frame();

@@ -93,6 +93,9 @@ class ViewSession {
     /// Switches to another built-in scene (or file): its own settings, flat start.
     void set_scene(const std::string& name_or_path);
     const SceneSpec& scene() const noexcept { return spec_; }
+    /// The scene as the panels have it now (size, total mass, materials, physics, fixed dt), without a
+    /// state: what File > Save scene writes (with capture_state(sim()) as its state).
+    SceneSpec current_spec() const;
     bool grid_scene() const noexcept { return spec_.cloth == ClothType::grid; }
     /// Increases when the scene changes (the camera reframes, the ground moves).
     std::uint64_t scene_generation() const noexcept { return scene_generation_; }

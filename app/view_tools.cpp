@@ -13,6 +13,7 @@
 #include <imgui.h>
 
 #include "drape/errors.hpp"
+#include "drape/scene_write.hpp"
 #include "obj_export.hpp"
 #include "screenshot.hpp"
 #include "view_app.hpp"
@@ -117,6 +118,25 @@ void Viewer::ui_strain_bar() {
 
 // ---- File panel ----------------------------------------------------------------------------------------
 
+void Viewer::save_scene_file(const std::string& path, bool with_state) {
+    try {
+        const SceneSpec spec = session_->current_spec();
+        if (with_state) {
+            const SceneState state = capture_state(session_->sim());
+            save_scene(path, spec, &state);
+        } else {
+            save_scene(path, spec);
+        }
+        session_->post(MessageLevel::info, "saved the scene" + std::string(with_state ? " and its state" : "") +
+                                               " to " + path);
+        std::fprintf(stderr, "drape view: saved the scene to %s\n", path.c_str());
+    } catch (const std::exception& e) { // InvalidInput (would not load back) or runtime_error (cannot write)
+        tools_.write_failed = true;
+        session_->post(MessageLevel::error, std::string("scene not saved: ") + e.what());
+        std::fprintf(stderr, "drape view: scene not saved: %s\n", e.what());
+    }
+}
+
 void Viewer::export_obj(const std::string& path) {
     try {
         write_obj_file(path, session_->sim(), session_->publisher(), tools_.obj_scratch, frame_index_);
@@ -190,6 +210,15 @@ void Viewer::ui_file_panel() {
     if (!ImGui::CollapsingHeader("File")) return;
     ToolsState& t = tools_;
     ImGui::PushItemWidth(220.0f);
+    ImGui::InputText("##scene path", t.scene_path, sizeof t.scene_path);
+    ImGui::SameLine();
+    if (ImGui::Button("Save scene")) save_scene_file(t.scene_path, t.save_state);
+    ImGui::Checkbox("with the cloth's current state", &t.save_state);
+    ImGui::SameLine();
+    ImGui::TextDisabled("(?)");
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("The scene file holds the current fabric, physics and size. With the state it also\n"
+                          "holds every position, velocity and pin: opened again, the run continues from here.");
     ImGui::InputText("##obj path", t.obj_path, sizeof t.obj_path);
     ImGui::SameLine();
     if (ImGui::Button("Export OBJ")) export_obj(t.obj_path);
@@ -226,6 +255,7 @@ bool Viewer::tools_key(int key) {
 int Viewer::finish_tools() {
     stop_recording();
     if (!options_.save_obj.empty()) export_obj(options_.save_obj);
+    if (!options_.save_scene.empty()) save_scene_file(options_.save_scene, true);
     return tools_.write_failed ? exit_code::write_failed : exit_code::ok;
 }
 

@@ -33,6 +33,7 @@ struct ToolsState {
     // File panel.
     // Text fields (ImGui edits fixed buffers in place).
     char scene_path[512] = "saved_scene.json";
+    bool save_state = true; ///< save positions, velocities and pins with the scene
     char obj_path[512] = "frame.obj";
     char record_path[512] = "recording"; ///< a directory (PNG frames) or a .mp4 file
     std::unique_ptr<FrameRecorder> recorder;
