@@ -24,7 +24,7 @@ float nice_strain_scale(float max_strain) {
     const float floor_scale = view_min_strain_scale_pct / 100.0f;
     if (!(max_strain > floor_scale)) return floor_scale;
     const float decade = std::pow(10.0f, std::floor(std::log10(max_strain)));
-    for (float m : {1.0f, 2.0f, 5.0f, 10.0f})
+    for (float m : {1.0f, 1.5f, 2.0f, 3.0f, 5.0f, 7.5f, 10.0f})
         if (max_strain <= m * decade * 1.0001f) return m * decade;
     return 10.0f * decade;
 }
@@ -46,9 +46,10 @@ void Viewer::publish_strain(std::span<float> region) {
         return;
     }
     // Auto scale: the 99th percentile of the vertices' strains (a few overstretched springs at a grabbed
-    // particle show red without washing out the rest), rounded up to 1, 2, 5 x 10^k; it grows at once and
+    // particle show red without washing out the rest), rounded up to 1, 1.5, 2, 3, 5, 7.5 x 10^k; it grows at once and
     // shrinks only after a second of frames that all wanted a smaller one.
-    const float want = nice_strain_scale(t.strain_field->quantile(0.99));
+    // (The histogram's bin edge can lie above the largest value: never beyond the frame's maximum.)
+    const float want = nice_strain_scale(std::min(t.strain_field->quantile(0.99), t.strain_frame_max));
     if (want >= shading_.strain_max) {
         shading_.strain_max = want;
         t.strain_lower_frames = 0;
@@ -230,8 +231,8 @@ void Viewer::ui_file_panel() {
                            t.recorder->target().c_str());
     } else {
         if (ImGui::Button("Record (V)")) start_recording(t.record_path);
-        ImGui::TextDisabled(on_path("ffmpeg") ? "a directory: PNG frames; name.mp4: video (ffmpeg)"
-                                              : "a directory: PNG frames (.mp4 needs ffmpeg on PATH)");
+        ImGui::TextDisabled(on_path("ffmpeg") ? "a folder: PNG frames; x.mp4: video (ffmpeg)"
+                                              : "a folder: PNG frames (.mp4 needs ffmpeg)");
     }
     ImGui::PopItemWidth();
 }

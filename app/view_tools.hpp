@@ -16,7 +16,7 @@ namespace drape::app {
 inline constexpr float view_min_strain_scale_pct = 0.1f;
 inline constexpr float view_max_strain_scale_pct = 200.0f;
 
-/// The auto colour-bar maximum for a frame's strain (its 99th percentile): the next value of 1, 2, 5 x 10^k
+/// The auto colour-bar maximum for a frame's strain (its 99th percentile): the next of 1, 1.5, 2, 3, 5, 7.5 x 10^k
 /// (fraction, at least view_min_strain_scale_pct %), so the scale stays put while the strain moves within a
 /// step.
 float nice_strain_scale(float max_strain);
