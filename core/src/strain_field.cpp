@@ -34,6 +34,26 @@ inline fbatch spring_strain(fbatch dx, fbatch dy, fbatch dz, fbatch rest) noexce
 constexpr std::uint32_t histogram_shift = 21;                     // keep sign, exponent, 2 mantissa bits
 constexpr std::uint32_t histogram_base = (127u - 14u) << 2;        // 2^-14 >> 21
 
+/// Bins of W strains at once: the arithmetic of bin_of on integer lanes.
+inline simd::ubatch bins_of(fbatch strain) noexcept {
+    const simd::ubatch bits = xsimd::bitwise_cast<simd::ubatch>(strain) & simd::ubatch(0x7fffffffu);
+    const simd::ubatch key = xsimd::max(bits >> histogram_shift, simd::ubatch(histogram_base));
+    return xsimd::min(key - simd::ubatch(histogram_base),
+                      simd::ubatch(static_cast<std::uint32_t>(StrainField::strain_bins - 1)));
+}
+
+/// Four interleaved counters per bin: consecutive vertices usually share a bin, and one counter would make
+/// every increment wait for the previous one.
+struct LocalHistogram {
+    std::uint32_t count[4][StrainField::strain_bins];
+    LocalHistogram() noexcept { std::memset(count, 0, sizeof count); }
+    void add(std::size_t lane, std::size_t bin) noexcept { ++count[lane & 3][bin]; }
+    void store(std::uint32_t* out) const noexcept {
+        for (std::size_t b = 0; b < StrainField::strain_bins; ++b)
+            out[b] = count[0][b] + count[1][b] + count[2][b] + count[3][b];
+    }
+};
+
 /// std::max's choice (the first argument unless the second is larger), spelled out so both paths agree.
 inline float larger(float a, float b) noexcept { return a < b ? b : a; }
 
@@ -198,9 +218,9 @@ void StrainField::block_grid(std::size_t block, Positions p, float* out) noexcep
     float block_max = 0.0f;
     fbatch max_v(0.0f);
     const fbatch zero(0.0f), rest_e(rest_east_), rest_s(rest_south_);
-    std::uint32_t* histogram = block_histogram_.data() + block * strain_bins;
-    std::fill(histogram, histogram + strain_bins, 0u);
+    LocalHistogram histogram;
     alignas(64) float lanes[W];
+    alignas(64) std::uint32_t lane_bins[W];
     for (std::size_t k = begin; k < end; k += W) {
         // SIMD when every lane's four neighbours are inside the arrays.
         if (k < columns || k + W + columns > particle_count_) {
@@ -208,7 +228,7 @@ void StrainField::block_grid(std::size_t block, Positions p, float* out) noexcep
                 const float s = grid_vertex_scalar(l, p);
                 out[l] = s;
                 block_max = larger(block_max, s);
-                if (l < particle_count_) ++histogram[bin_of(s)];
+                if (l < particle_count_) histogram.add(l, bin_of(s));
             }
             continue;
         }
@@ -227,10 +247,11 @@ void StrainField::block_grid(std::size_t block, Positions p, float* out) noexcep
         side(north_bit, k - columns, rest_s);
         s.store_unaligned(out + k);
         max_v = simd::select(max_v < s, s, max_v);
-        s.store_aligned(lanes); // every lane is a real vertex here (k + W <= particle_count - columns)
-        for (float v : lanes)
-            ++histogram[bin_of(v)];
+        bins_of(s).store_aligned(lane_bins); // every lane is a real vertex here (k + W <= count - columns)
+        for (std::size_t l = 0; l < W; ++l)
+            histogram.add(l, lane_bins[l]);
     }
+    histogram.store(block_histogram_.data() + block * strain_bins);
     max_v.store_aligned(lanes);
     for (float v : lanes)
         block_max = larger(block_max, v);
@@ -242,8 +263,7 @@ void StrainField::block_general(std::size_t block, Positions p, float* out) noex
     const std::size_t end = std::min(begin + block_particles, plane_floats_);
     const std::size_t real_end = std::min(end, particle_count_);
     float block_max = 0.0f;
-    std::uint32_t* histogram = block_histogram_.data() + block * strain_bins;
-    std::fill(histogram, histogram + strain_bins, 0u);
+    LocalHistogram histogram;
     for (std::size_t k = begin; k < real_end; ++k) {
         const float px = p.x[k], py = p.y[k], pz = p.z[k];
         float s = 0.0f;
@@ -253,8 +273,9 @@ void StrainField::block_general(std::size_t block, Positions p, float* out) noex
         }
         out[k] = s;
         block_max = larger(block_max, s);
-        ++histogram[bin_of(s)];
+        histogram.add(k, bin_of(s));
     }
+    histogram.store(block_histogram_.data() + block * strain_bins);
     for (std::size_t k = real_end; k < end; ++k)
         out[k] = 0.0f;
     block_max_[block] = block_max;
