@@ -83,7 +83,7 @@ class Viewer {
     // Tools (view_tools.cpp): strain colours, File panel, recording.
     void publish_strain(std::span<float> region);
     void ui_strain_controls();
-    void ui_strain_bar();
+    void ui_tool_overlays();
     void ui_file_panel();
     void export_obj(const std::string& path);
     void save_scene_file(const std::string& path, bool with_state);

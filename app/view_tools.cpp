@@ -78,10 +78,22 @@ void Viewer::ui_strain_controls() {
     }
 }
 
-void Viewer::ui_strain_bar() {
-    if (!shading_.strain_colours) return;
+void Viewer::ui_tool_overlays() {
     const ImGuiIO& io = ImGui::GetIO();
-    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - 8.0f, io.DisplaySize.y - 8.0f), ImGuiCond_Always,
+    if (tools_.recorder && show_ui_) {
+        // A recording badge under the stats overlay (Tab hides it with the panels, for a clean recording).
+        ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - 8.0f, 150.0f), ImGuiCond_Always, ImVec2(1.0f, 0.0f));
+        ImGui::SetNextWindowBgAlpha(0.62f);
+        ImGui::Begin("recording", nullptr,
+                     ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoNav |
+                         ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoInputs);
+        ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.3f, 1.0f), "REC  %zu frames  (V stops)",
+                           tools_.recorder->frames_written());
+        ImGui::End();
+    }
+    if (!shading_.strain_colours) return;
+    // Bottom right, above the status line (messages sit at the bottom, centred on the free area).
+    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - 8.0f, io.DisplaySize.y - 52.0f), ImGuiCond_Always,
                             ImVec2(1.0f, 1.0f));
     ImGui::SetNextWindowBgAlpha(0.7f);
     ImGui::Begin("strain", nullptr,

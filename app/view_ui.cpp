@@ -58,7 +58,7 @@ void Viewer::build_ui() {
         ui_panels();
         ui_overlay();
     }
-    ui_strain_bar();
+    ui_tool_overlays();
     ui_messages();
     if (show_help_) ui_help();
 }
