@@ -269,7 +269,8 @@ int Viewer::finish_tools() {
     stop_recording();
     if (!options_.save_obj.empty()) export_obj(options_.save_obj);
     if (!options_.save_scene.empty()) save_scene_file(options_.save_scene, true);
-    return tools_.write_failed ? exit_code::write_failed : exit_code::ok;
+    // Automation (--frames) exits write_failed; an interactive user has already seen the message.
+    return tools_.write_failed && options_.frames > 0 ? exit_code::write_failed : exit_code::ok;
 }
 
 } // namespace drape::app
