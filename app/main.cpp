@@ -138,6 +138,14 @@ int main(int argc, char** argv) {
         ->group("");
     view_cmd->add_flag("--paused", view.start_paused, "Start paused")->group("");
     view_cmd->add_flag("--key-help", view.key_help, "Open the F1 key help")->group("");
+    view_cmd->add_flag("--strain-colours", view.strain_colours, "Start with strain colours on (C toggles them)")
+        ->group("");
+    view_cmd->add_option("--record", view.record,
+                         "Record from the first frame: a directory (PNG frames) or FILE.mp4 (needs ffmpeg)")
+        ->group("");
+    view_cmd->add_option("--save-obj", view.save_obj, "At exit, export the last frame as this OBJ file")->group("");
+    view_cmd->add_option("--save-scene", view.save_scene, "At exit, save the scene and its state to this file")
+        ->group("");
 
     auto is_command = [&](const std::string& name) {
         for (const CLI::App* sub : app.get_subcommands({}))

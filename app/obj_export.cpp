@@ -1,7 +1,9 @@
 #include "obj_export.hpp"
 
 #include <array>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 #include "drape/errors.hpp"
@@ -10,7 +12,7 @@ namespace drape::app {
 
 ObjExporter::ObjExporter(const Cloth& cloth, std::string directory)
     : directory_(std::move(directory)), publisher_(std::make_unique<Publisher>(cloth)),
-      planes_(publisher_->output_floats()), triangles_(cloth.triangles) {
+      planes_(publisher_->output_floats()) {
     std::error_code ec;
     std::filesystem::create_directories(directory_, ec);
     if (ec || !std::filesystem::is_directory(directory_))
@@ -18,16 +20,28 @@ ObjExporter::ObjExporter(const Cloth& cloth, std::string directory)
 }
 
 std::string ObjExporter::write(const Simulation& sim, std::size_t index) {
-    publisher_->publish(sim.x(), sim.y(), sim.z(), planes_);
     char name[32];
     std::snprintf(name, sizeof name, "frame_%05zu.obj", index);
     const std::string path = (std::filesystem::path(directory_) / name).string();
+    try {
+        write_obj_file(path, sim, *publisher_, planes_, index);
+    } catch (const InvalidInput& e) {
+        throw InvalidInput(std::string("--export-obj: ") + e.what());
+    }
+    return path;
+}
+
+void write_obj_file(const std::string& path, const Simulation& sim, Publisher& publisher,
+                    std::vector<float>& scratch, std::size_t frame_index) {
+    if (scratch.size() < publisher.output_floats()) scratch.resize(publisher.output_floats());
+    publisher.publish(sim.x(), sim.y(), sim.z(), scratch);
     std::FILE* f = std::fopen(path.c_str(), "wb");
-    if (!f) throw InvalidInput("--export-obj: cannot write '" + path + "'");
-    const std::size_t n = publisher_->particle_count(), stride = publisher_->plane_floats();
-    const float* p = planes_.data();
-    std::fprintf(f, "# drape frame %zu, t = %.6f s, %zu vertices, %zu triangles\n", index, sim.time(), n,
-                 triangles_.size() / 3);
+    if (!f) throw InvalidInput("cannot write '" + path + "': " + std::strerror(errno));
+    const std::vector<std::uint32_t>& triangles = sim.cloth().triangles;
+    const std::size_t n = publisher.particle_count(), stride = publisher.plane_floats();
+    const float* p = scratch.data();
+    std::fprintf(f, "# drape frame %zu, t = %.6f s, %zu vertices, %zu triangles\n", frame_index, sim.time(), n,
+                 triangles.size() / 3);
     // World positions: the simulation's origin added back in double, with digits enough for the float32
     // relative position when the origin is away from zero (1000 m + 1 nm).
     const std::array<double, 3>& o = sim.origin();
@@ -40,13 +54,12 @@ std::string ObjExporter::write(const Simulation& sim, std::size_t index) {
             std::fprintf(f, "v %.6g %.6g %.6g\n", p[i], p[stride + i], p[2 * stride + i]);
     for (std::size_t i = 0; i < n; ++i)
         std::fprintf(f, "vn %.5g %.5g %.5g\n", p[3 * stride + i], p[4 * stride + i], p[5 * stride + i]);
-    for (std::size_t t = 0; t + 2 < triangles_.size(); t += 3) {
-        const unsigned a = triangles_[t] + 1, b = triangles_[t + 1] + 1, c = triangles_[t + 2] + 1;
+    for (std::size_t t = 0; t + 2 < triangles.size(); t += 3) {
+        const unsigned a = triangles[t] + 1, b = triangles[t + 1] + 1, c = triangles[t + 2] + 1;
         std::fprintf(f, "f %u//%u %u//%u %u//%u\n", a, a, b, b, c, c);
     }
     const bool ok = std::ferror(f) == 0;
-    if (std::fclose(f) != 0 || !ok) throw InvalidInput("--export-obj: error writing '" + path + "' (disk full?)");
-    return path;
+    if (std::fclose(f) != 0 || !ok) throw InvalidInput("error writing '" + path + "' (disk full?)");
 }
 
 } // namespace drape::app

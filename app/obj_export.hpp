@@ -12,6 +12,12 @@
 
 namespace drape::app {
 
+/// Writes the simulation's current state as one OBJ file at `path` (positions, area-weighted normals from
+/// `publisher`, triangles); `scratch` receives the publisher's planes (resized to fit). Throws InvalidInput
+/// naming the path when it cannot be written.
+void write_obj_file(const std::string& path, const Simulation& sim, Publisher& publisher,
+                    std::vector<float>& scratch, std::size_t frame_index = 0);
+
 class ObjExporter {
   public:
     /// Creates `directory` if needed; throws InvalidInput if it cannot be created or written.
@@ -23,7 +29,6 @@ class ObjExporter {
     std::string directory_;
     std::unique_ptr<Publisher> publisher_;
     std::vector<float> planes_; ///< scratch for the publisher's output (sized once)
-    std::vector<std::uint32_t> triangles_;
 };
 
 } // namespace drape::app

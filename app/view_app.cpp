@@ -79,6 +79,7 @@ Viewer::Viewer(const ViewOptions& options) : options_(options) {
     show_ui_ = options.ui;
     scripted_mouse = options.demo_grab;
     full_mesh_ = options.full_mesh;
+    shading_.strain_colours = options.strain_colours;
     show_help_ = options.key_help;
     window_ = render::open_window(options.width, options.height, "drape - cloth viewer", true);
     glfwSwapInterval(options.vsync ? 1 : 0);
@@ -422,6 +423,7 @@ void Viewer::handle_key(int key, int mods) {
         if (mods & GLFW_MOD_CONTROL) glfwSetWindowShouldClose(window_, GLFW_TRUE);
         break;
     default:
+        tools_key(key);
         break;
     }
 }
@@ -573,6 +575,7 @@ int Viewer::run() {
         std::span<float> region = renderer_->begin_frame(&t.wait);
         t0 = clock_type::now();
         last_publish_ = session_->publish(region);
+        if (last_publish_.finite) publish_strain(region);
         t.publish = ms_since(t0);
         if (!last_publish_.finite) {
             // Cannot happen after a finite step (the core checks); never draw garbage if it does.
@@ -601,6 +604,7 @@ int Viewer::run() {
             pending_screenshot_.clear();
         }
         if (last_frame && !final_screenshot.empty()) save_screenshot(final_screenshot);
+        record_frame();
         const auto swap_start = clock_type::now();
         glfwSwapBuffers(window_);
         const auto now = clock_type::now();
@@ -655,14 +659,16 @@ int Viewer::run() {
         build_ui();
         std::span<float> region = renderer_->begin_frame();
         session_->publish(region);
+        publish_strain(region);
         draw_scene();
         ImGui::Render();
         ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
         save_screenshot(final_screenshot);
     }
+    const int tools_rc = finish_tools();
     if (options_.stats_json) print_stats_json();
     if (had_error_) return failure_code_ ? failure_code_ : exit_code::non_finite;
-    return write_failed_ ? exit_code::write_failed : exit_code::ok;
+    return write_failed_ ? exit_code::write_failed : tools_rc;
 }
 
 void Viewer::print_stats_json() const {
@@ -706,6 +712,7 @@ void Viewer::print_stats_json() const {
                      {"install_frame_ms", install_frame_ms_}};
     j["sim_steps"] = s.steps_done();
     j["publish_path"] = session_->publisher().grid_path() ? "grid-simd" : "general";
+    j["strain_colours"] = shading_.strain_colours;
     j["triangles_drawn"] = renderer_->triangle_count();
     j["triangles"] = s.cloth().triangles.size() / 3;
     j["lod_stride"] = renderer_->lod_stride();

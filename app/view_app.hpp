@@ -28,6 +28,7 @@
 #include "stage.hpp"
 #include "view_command.hpp"
 #include "view_session.hpp"
+#include "view_tools.hpp"
 
 struct GLFWwindow;
 
@@ -99,6 +100,18 @@ class Viewer {
     void update_hover();
     void start_grab(const PickHit& hit, double x, double y);
     void save_screenshot(const std::string& path);
+    // Tools (view_tools.cpp): strain colours, File panel, recording.
+    void publish_strain(std::span<float> region);
+    void ui_strain_controls();
+    void ui_tool_overlays();
+    void ui_file_panel();
+    void export_obj(const std::string& path);
+    void save_scene_file(const std::string& path, bool with_state);
+    void start_recording(const std::string& target);
+    void stop_recording();
+    void record_frame();
+    bool tools_key(int key);
+    int finish_tools();
 
     ViewOptions options_;
     GLFWwindow* window_ = nullptr;
@@ -161,6 +174,7 @@ class Viewer {
     double install_frame_ms_ = 0.0;     ///< the frame that swapped the last one in       ///< exit code of the last simulation failure (exit_code::non_finite / blow_up)
     std::string reported_error_; ///< the failure last printed on stderr
     std::string pending_screenshot_;
+    ToolsState tools_;
 };
 
 } // namespace drape::app

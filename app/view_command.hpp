@@ -28,6 +28,10 @@ struct ViewOptions {
     bool demo_grab = false;   ///< grab the free corner half-way through --frames and drag it
     bool start_paused = false;
     bool key_help = false; ///< the F1 key help open
+    bool strain_colours = false; ///< start with strain colours on
+    std::string record;          ///< record from the first frame: a directory (PNG frames) or a .mp4 file
+    std::string save_obj;        ///< export the last frame as this OBJ file at exit
+    std::string save_scene;      ///< save the scene and its state as this scene file at exit
 };
 
 /// Opens the viewer and runs it until the window closes or `frames` frames are drawn. Returns the exit code

@@ -1010,4 +1010,33 @@ void ViewSession::toggle_pin(std::size_t i) {
     post(MessageLevel::info, std::string(pin ? "pinned" : "unpinned") + " particle " + std::to_string(i));
 }
 
+SceneSpec ViewSession::current_spec() const {
+    // The same mapping from the panels' settings to a spec as rebuild() uses, plus the physics panel.
+    SceneSpec spec = spec_;
+    spec.state.reset();
+    spec.warnings.clear();
+    if (spec.cloth == ClothType::grid) {
+        spec.grid.n = size_;
+        if (sim_) spec.grid.total_mass = fabric_.node_mass_g * 1e-3f * float(sim_->cloth().particle_count);
+    } else if (spec.cloth == ClothType::tshirt) {
+        spec.tshirt.cells_per_metre = static_cast<float>(size_);
+        if (sim_)
+            spec.tshirt.total_mass =
+                std::clamp(fabric_.node_mass_g * 1e-3f * float(sim_->cloth().particle_count), 0.001f, 10.0f);
+    }
+    const std::array<float, spring_kind_count>& k = fabric_.stiffness;
+    spec.stiffness = k[0];
+    if (k[0] > 0.0f) {
+        spec.shear_ratio = k[static_cast<std::size_t>(SpringKind::shear)] / k[0];
+        spec.bend_ratio = k[static_cast<std::size_t>(SpringKind::bend)] / k[0];
+    }
+    spec.seam_stiffness = k[static_cast<std::size_t>(SpringKind::seam)];
+    spec.damping_ratio = fabric_.damping_ratio;
+    const std::vector<Collider> colliders = spec_.physics.colliders; // the scene's own (a body is spec.body)
+    spec.physics = params_;
+    spec.physics.colliders = colliders;
+    spec.dt = auto_dt_ ? std::nullopt : std::optional<float>(params_.dt);
+    return spec;
+}
+
 } // namespace drape::app

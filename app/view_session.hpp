@@ -126,6 +126,8 @@ class ViewSession {
     std::size_t advance();
     /// Writes the current positions and normals into `out` (Publisher::publish) inside the workers.
     PublishStats publish(std::span<float> out);
+    /// Runs f inside the session's workers (other per-frame output stages: strain colours).
+    template <class F> decltype(auto) in_workers(F&& f) { return workers_->run(std::forward<F>(f)); }
 
     // Background rebuilds.
     /// Installs a finished build (the new cloth replaces the old one here, on the caller's thread) and starts the
@@ -168,6 +170,9 @@ class ViewSession {
     /// Switches to another built-in scene (or file): its own settings, flat start (in the background).
     void set_scene(const std::string& name_or_path);
     const SceneSpec& scene() const noexcept { return spec_; }
+    /// The scene as the panels have it now (size, total mass, materials, physics, fixed dt), without a
+    /// state: what File > Save scene writes (with capture_state(sim()) as its state).
+    SceneSpec current_spec() const;
     bool grid_scene() const noexcept { return spec_.cloth == ClothType::grid; }
     /// Increases when the scene changes (the camera reframes, the ground moves).
     std::uint64_t scene_generation() const noexcept { return scene_generation_; }

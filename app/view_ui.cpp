@@ -114,6 +114,7 @@ void Viewer::build_ui() {
         ui_panels();
         ui_overlay();
     }
+    ui_tool_overlays();
     ui_messages();
     ui_build_progress();
     ui_confirmation();
@@ -142,6 +143,7 @@ void Viewer::ui_panels() {
     if (ImGui::CollapsingHeader("Lighting")) ui_lighting();
     ImGui::SetNextItemOpen(options_.panels_open, open_cond);
     if (ImGui::CollapsingHeader("Camera")) ui_camera();
+    ui_file_panel();
     ImGui::Separator();
     ImGui::TextDisabled("F1: keys and mouse   Tab: hide panels");
     ImGui::PopItemWidth();
@@ -232,6 +234,7 @@ void Viewer::ui_fabric() {
     ImGui::SliderFloat("specular", &shading_.specular, 0.0f, 1.0f, "%.2f", clamp_flags);
     ImGui::SliderFloat("shininess", &shading_.shininess, 1.0f, 512.0f, "%.0f", log_flags);
     ImGui::Checkbox("checker pattern", &shading_.checker);
+    ui_strain_controls();
 }
 
 void Viewer::ui_physics() {
@@ -509,6 +512,8 @@ void Viewer::ui_help() {
         {"drop a .json file", "open it as the scene"},
         {"G", "ground grid on / off"},
         {"Tab", "panels on / off"},
+        {"C", "strain colours on / off"},
+        {"V", "record on / off (File panel: PNG frames or .mp4)"},
         {"F12", "screenshot drape_<time>.png"},
         {"Esc", "close this help / let go of the particle"},
         {"Ctrl+Q", "quit"},

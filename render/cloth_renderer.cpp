@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace drape::render {
@@ -17,14 +19,17 @@ layout(location = 2) in float pz;
 layout(location = 3) in float nx;
 layout(location = 4) in float ny;
 layout(location = 5) in float nz;
+layout(location = 6) in float strain;  // plane 6: per-vertex strain (drape/strain_field.hpp), when written
 uniform mat4 u_view_projection;
 uniform int u_base_vertex;  // gl_VertexID includes the base vertex
 uniform int u_columns;      // > 0: grid cloth, index = row * columns + column
 out vec3 v_position;
 out vec3 v_normal;
 out vec2 v_grid;
+out float v_strain;
 void main() {
     v_position = vec3(px, py, pz);
+    v_strain = strain;
     v_normal = vec3(nx, ny, nz);
     int k = gl_VertexID - u_base_vertex;
     v_grid = u_columns > 0 ? vec2(k % u_columns, k / u_columns) / float(max(u_columns - 1, 1)) : vec2(0.0);
@@ -36,6 +41,7 @@ const char* const cloth_fs = R"(#version 450 core
 in vec3 v_position;
 in vec3 v_normal;
 in vec2 v_grid;
+in float v_strain;
 uniform vec3 u_eye;
 uniform vec3 u_light_position;
 uniform float u_light_intensity;
@@ -46,7 +52,14 @@ uniform float u_diffuse;
 uniform float u_specular;
 uniform float u_shininess;
 uniform float u_checker;    // 0 = off, else the darkening of every other square
+uniform float u_strain_max; // > 0: colour by strain, 0 .. u_strain_max over the colour map below
+const vec3 strain_stops[5] = vec3[5](STRAIN_STOPS);  // sRGB, the same as strain_colour_srgb()
 out vec4 out_colour;
+vec3 strain_colour(float t) {
+    float u = clamp(t, 0.0, 1.0) * 4.0;
+    int i = min(int(u), 3);
+    return pow(mix(strain_stops[i], strain_stops[i + 1], u - float(i)), vec3(2.2));  // to linear
+}
 void main() {
     vec3 n = normalize(v_normal);
     vec3 base = u_front;
@@ -54,7 +67,9 @@ void main() {
         n = -n;
         base = u_back;
     }
-    if (u_checker > 0.0) {
+    if (u_strain_max > 0.0) {
+        base = strain_colour(v_strain / u_strain_max);
+    } else if (u_checker > 0.0) {
         vec2 cell = floor(v_grid * 16.0 - 1e-4);
         base *= 1.0 - u_checker * mod(cell.x + cell.y, 2.0);
     }
@@ -115,17 +130,45 @@ std::vector<std::uint32_t> lod_triangles(std::uint32_t columns, std::uint32_t ro
     return t;
 }
 
+/// The strain colour map's stops (sRGB, evenly spaced over 0 .. 1): blue, cyan, green, yellow, red.
+constexpr float strain_stops[5][3] = {
+    {0.18f, 0.26f, 0.72f}, {0.20f, 0.68f, 0.92f}, {0.30f, 0.80f, 0.32f}, {0.98f, 0.84f, 0.18f}, {0.86f, 0.13f, 0.10f}};
+
+/// The fragment shader with the colour map's stops written in (one source for the shader and the colour bar).
+std::string cloth_fragment_source() {
+    std::string stops;
+    for (int i = 0; i < 5; ++i) {
+        char v[80];
+        std::snprintf(v, sizeof v, "%svec3(%.4f, %.4f, %.4f)", i ? ", " : "", double(strain_stops[i][0]),
+                      double(strain_stops[i][1]), double(strain_stops[i][2]));
+        stops += v;
+    }
+    std::string s = cloth_fs;
+    s.replace(s.find("STRAIN_STOPS"), 12, stops);
+    return s;
+}
+
 Eigen::Vector3f to_linear(const Eigen::Vector3f& srgb) {
     return {std::pow(srgb.x(), 2.2f), std::pow(srgb.y(), 2.2f), std::pow(srgb.z(), 2.2f)};
 }
 
 } // namespace
 
+Eigen::Vector3f strain_colour_srgb(float t) {
+    const float u = std::clamp(std::isfinite(t) ? t : 1.0f, 0.0f, 1.0f) * 4.0f;
+    const int i = std::min(static_cast<int>(u), 3);
+    const float f = u - float(i);
+    Eigen::Vector3f c;
+    for (int k = 0; k < 3; ++k)
+        c[k] = strain_stops[i][k] + f * (strain_stops[i + 1][k] - strain_stops[i][k]);
+    return c;
+}
+
 ClothRenderer::ClothRenderer(std::span<const std::uint32_t> triangles, std::size_t particle_count,
                              std::size_t plane_floats, std::uint32_t grid_columns, std::uint32_t grid_rows,
                              bool full_detail)
     : particle_count_(particle_count), plane_floats_(plane_floats), grid_columns_(grid_columns),
-      ring_(6 * plane_floats), cloth_program_(cloth_vs, cloth_fs, "cloth"),
+      ring_(vertex_planes * plane_floats), cloth_program_(cloth_vs, cloth_fragment_source().c_str(), "cloth"),
       marker_program_(marker_vs, marker_fs, "marker") {
     std::vector<std::uint32_t> coarse;
     const std::uint32_t side = std::max(grid_columns, grid_rows);
@@ -147,7 +190,7 @@ ClothRenderer::ClothRenderer(std::span<const std::uint32_t> triangles, std::size
     glNamedBufferData(marker_buffer_, 64, nullptr, GL_DYNAMIC_DRAW);
 
     glCreateVertexArrays(1, &vao_);
-    for (GLuint p = 0; p < 6; ++p) {
+    for (GLuint p = 0; p < vertex_planes; ++p) {
         glEnableVertexArrayAttrib(vao_, p);
         glVertexArrayAttribFormat(vao_, p, 1, GL_FLOAT, GL_FALSE, 0);
         glVertexArrayAttribBinding(vao_, p, p);
@@ -187,6 +230,8 @@ void ClothRenderer::draw_cloth(const Eigen::Matrix4f& view_projection, const Eig
     glUniform1f(cloth_program_.uniform("u_specular"), s.specular);
     glUniform1f(cloth_program_.uniform("u_shininess"), s.shininess);
     glUniform1f(cloth_program_.uniform("u_checker"), (s.checker && grid_columns_ > 1) ? 0.12f : 0.0f);
+    // Strain colours read plane 6, which the caller wrote this frame (strain_plane()) only while they are on.
+    glUniform1f(cloth_program_.uniform("u_strain_max"), s.strain_colours ? std::max(s.strain_max, 1e-6f) : 0.0f);
     glBindVertexArray(vao_);
     glVertexArrayElementBuffer(vao_, index_buffer_);
     glDisable(GL_CULL_FACE);

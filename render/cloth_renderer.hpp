@@ -1,5 +1,6 @@
 // Draws the cloth from the vertex ring (vertex_ring.hpp) that core's output stage (drape/publish.hpp) fills:
-// six float attributes, one per plane (x, y, z, nx, ny, nz), a static index buffer of the triangles,
+// six float attributes, one per plane (x, y, z, nx, ny, nz) plus an optional strain plane (strain colours), a
+// static index buffer of the triangles,
 // Blinn-Phong shading with a point light, two-sided (back faces get the flipped normal and optionally their
 // own colour), and round markers for pinned, grabbed and hovered particles.
 //
@@ -39,10 +40,22 @@ struct Shading {
     Eigen::Vector3f light_position{1.1f, 0.7f, 1.3f}; ///< m, world space
     float light_intensity = 1.0f;                     ///< [0, 4]
     bool checker = true; ///< faint checker pattern on grid cloths (shows the shape while it moves)
+    /// Colour by per-vertex strain (plane 6 of the region, drape/strain_field.hpp) instead of the material
+    /// colours: 0 .. strain_max (0.05 = 5 %) over strain_colour_srgb()'s map; lighting as usual.
+    bool strain_colours = false;
+    float strain_max = 0.05f;
 };
+
+/// The strain colour map at t in [0, 1] (clamped; NaN reads as 1), sRGB: blue, cyan, green, yellow, red. The
+/// shader uses the same stops; the viewer draws its colour bar with this.
+Eigen::Vector3f strain_colour_srgb(float t);
 
 class ClothRenderer {
   public:
+    /// Planes per ring region: publish.hpp's six (x, y, z, nx, ny, nz) and the strain plane.
+    static constexpr std::size_t vertex_planes = 7;
+    static constexpr std::size_t strain_plane_index = 6;
+
     /// particle_count vertices laid out as publish.hpp describes (planes of plane_floats floats);
     /// grid_columns > 0 when the cloth is a grid of that many columns (enables the checker pattern).
     ClothRenderer(std::span<const std::uint32_t> triangles, std::size_t particle_count,
@@ -56,6 +69,10 @@ class ClothRenderer {
 
     /// Waits for this frame's region to be free and returns it for the output stage to write.
     std::span<float> begin_frame(double* out_wait_ms = nullptr);
+    /// The strain plane of a region begin_frame() returned (plane_floats floats).
+    std::span<float> strain_plane(std::span<float> region) const noexcept {
+        return region.subspan(strain_plane_index * plane_floats_, plane_floats_);
+    }
     void draw_cloth(const Eigen::Matrix4f& view_projection, const Eigen::Vector3f& eye,
                     const Shading& shading);
     /// Replaces the marker list (only when pins change, not per frame). highlight / hover: particle index or

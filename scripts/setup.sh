@@ -11,6 +11,7 @@ packages=(
   libimgui-dev nlohmann-json3-dev libcli11-dev libstb-dev libtinyobjloader-dev
   xvfb xauth mesa-utils xdotool
   python3-matplotlib
+  ffmpeg # the viewer's .mp4 recording (optional at run time; tests/viewer_tools.py checks it when present)
 )
 
 missing=()

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <new>
 
+#include "drape/strain_field.hpp"
 #include "drape/workers.hpp"
 #include "test_helpers.hpp"
 
@@ -106,5 +107,27 @@ INSTANTIATE_TEST_SUITE_P(
                       AllocCase{KernelPath::grid, true, Integrator::verlet, true},
                       AllocCase{KernelPath::csr, true, Integrator::symplectic_euler, true},
                       AllocCase{KernelPath::grid, false, Integrator::symplectic_euler, true}));
+
+// The viewer's strain-colouring stage runs every frame: cooked once, then compute() allocates nothing.
+TEST(NoAllocation, StrainFieldComputeDoesNotAllocate) {
+    Workers workers(3);
+    workers.run([&] {
+    SceneBuild scene = drape::testing::perturbed_hang(100, 0.3f, 0.0f, 5u);
+    Cloth general = scene.cloth;
+    general.grid.reset();
+    for (const Cloth* cloth : {&scene.cloth, &general}) {
+        StrainField field(*cloth);
+        std::vector<float> out(field.plane_floats());
+        const auto& s = scene.initial;
+        field.compute(s.x, s.y, s.z, out); // warm-up: the thread pool starts here
+        allocations = 0;
+        counting = true;
+        for (int i = 0; i < 20; ++i)
+            field.compute(s.x, s.y, s.z, out);
+        counting = false;
+        EXPECT_EQ(allocations.load(), 0u) << (field.grid_path() ? "grid" : "general") << " path";
+    }
+    });
+}
 
 } // namespace
