@@ -1,6 +1,8 @@
 #include "obj_export.hpp"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 #include "drape/errors.hpp"
@@ -13,7 +15,7 @@ ObjExporter::ObjExporter(const Cloth& cloth, std::string directory)
     std::error_code ec;
     std::filesystem::create_directories(directory_, ec);
     if (ec || !std::filesystem::is_directory(directory_))
-        throw InvalidInput("--export-obj: cannot create directory '" + directory_ + "': " + ec.message());
+        throw WriteError("--export-obj: cannot create directory '" + directory_ + "': " + ec.message());
 }
 
 std::string ObjExporter::write(const Simulation& sim, std::size_t index) {
@@ -22,7 +24,7 @@ std::string ObjExporter::write(const Simulation& sim, std::size_t index) {
     std::snprintf(name, sizeof name, "frame_%05zu.obj", index);
     const std::string path = (std::filesystem::path(directory_) / name).string();
     std::FILE* f = std::fopen(path.c_str(), "wb");
-    if (!f) throw InvalidInput("--export-obj: cannot write '" + path + "'");
+    if (!f) throw WriteError("--export-obj: cannot write '" + path + "' (" + std::strerror(errno) + ")");
     const std::size_t n = publisher_->particle_count(), stride = publisher_->plane_floats();
     const float* p = planes_.data();
     std::fprintf(f, "# drape frame %zu, t = %.6f s, %zu vertices, %zu triangles\n", index, sim.time(), n,
@@ -35,7 +37,7 @@ std::string ObjExporter::write(const Simulation& sim, std::size_t index) {
         std::fprintf(f, "f %u//%u %u//%u %u//%u\n", a, a, b, b, c, c);
     }
     const bool ok = std::ferror(f) == 0;
-    if (std::fclose(f) != 0 || !ok) throw InvalidInput("--export-obj: error writing '" + path + "' (disk full?)");
+    if (std::fclose(f) != 0 || !ok) throw WriteError("--export-obj: error writing '" + path + "' (disk full?)");
     return path;
 }
 

@@ -1,11 +1,14 @@
 #include "screenshot.hpp"
 
+#include <cerrno>
 #include <cstring>
 #include <stdexcept>
 #include <vector>
 
 #include <glad/gl.h>
 #include <stb_image_write.h>
+
+#include "drape/errors.hpp"
 
 namespace drape::render {
 
@@ -26,8 +29,10 @@ void save_screenshot_png(const std::string& path, int width, int height) {
         std::memcpy(a, b, row);
         std::memcpy(b, tmp.data(), row);
     }
+    errno = 0;
     if (!stbi_write_png(path.c_str(), width, height, 3, pixels.data(), static_cast<int>(row)))
-        throw std::runtime_error("cannot write the screenshot " + path);
+        throw WriteError("cannot write the screenshot " + path +
+                         (errno ? std::string(" (") + std::strerror(errno) + ")" : std::string()));
 }
 
 } // namespace drape::render

@@ -6,7 +6,7 @@
 namespace drape::render {
 
 /// Reads width x height RGB pixels of the back buffer and writes them to `path` (rows flipped so the PNG is
-/// upright). Throws std::runtime_error naming the path when it cannot be written.
+/// upright). Throws drape::WriteError naming the path when it cannot be written.
 void save_screenshot_png(const std::string& path, int width, int height);
 
 } // namespace drape::render

@@ -50,7 +50,7 @@ echo '{"cloth": ' >"$tmpdir/malformed.json"
 expect_error "cloth.n" run --scene "$tmpdir/huge.json"
 expect_error "cloth.colour is not a known field" run --scene "$tmpdir/unknown.json"
 expect_error "malformed JSON" run --scene "$tmpdir/malformed.json"
-expect_error "cannot open" run --scene "$tmpdir/missing.json"
+expect_error "does not exist" run --scene "$tmpdir/missing.json"
 expect_error "--every" run --every 5
 expect_error "[10, 1000]" run --scene tshirt --size 5
 
