@@ -155,6 +155,30 @@ std::string shorten(const std::string& s, std::size_t max_chars = 40) {
     return s.size() <= max_chars ? s : s.substr(0, max_chars - 3) + "...";
 }
 
+/// Text from the file (a key, a string value, a parser message) made fit for a one-line message: control characters
+/// escaped (\u000a), and at most about max_chars long, cut in the middle ("cloth[0][0]...[0][0]") on character
+/// boundaries.
+std::string printable(const std::string& s, std::size_t max_chars) {
+    std::string out;
+    for (const char ch : s) {
+        const auto c = static_cast<unsigned char>(ch);
+        if (c < 0x20 || c == 0x7f) {
+            char esc[8];
+            std::snprintf(esc, sizeof esc, "\\u%04x", unsigned(c));
+            out += esc;
+        } else {
+            out += ch;
+        }
+    }
+    if (out.size() <= max_chars) return out;
+    auto boundary = [&](std::size_t k) { // back to the first byte of a UTF-8 character
+        while (k > 0 && (static_cast<unsigned char>(out[k]) & 0xC0) == 0x80) --k;
+        return k;
+    };
+    const std::size_t head = boundary(max_chars / 2), tail = boundary(out.size() - max_chars / 2);
+    return out.substr(0, head) + "..." + out.substr(tail);
+}
+
 /// Parses JSON text, turning non-finite numbers into null and recording them (at most 32: past that, the first one
 /// is reported without its field's range). Any other error is "malformed JSON" naming where it is.
 json parse_json(std::string text, const std::string& source, NonFiniteNumbers& non_finite) {
@@ -164,12 +188,12 @@ json parse_json(std::string text, const std::string& source, NonFiniteNumbers& n
         if (json::sax_parse(text, &parser)) return doc;
         const auto [begin, end] = non_finite_token(text, parser);
         if (begin == end) {
-            std::string where = parser.error_path.empty() ? "" : " (near " + parser.error_path + ")";
-            throw InvalidInput(source + ": malformed JSON" + where + ": " + parser.error_message);
+            std::string where = parser.error_path.empty() ? "" : " (near " + printable(parser.error_path, 160) + ")";
+            throw InvalidInput(source + ": malformed JSON" + where + ": " + printable(parser.error_message, 400));
         }
         const std::string token = text.substr(begin, end - begin);
         if (attempt == 32)
-            throw InvalidInput(source + ": " + parser.error_path + " = " + shorten(token) +
+            throw InvalidInput(source + ": " + printable(parser.error_path, 160) + " = " + shorten(token) +
                                " is not a finite number (JSON numbers must be finite doubles)");
         non_finite.emplace(parser.error_path, token);
         // A 0 padded to the token's length: the reader reports the recorded token at this path whatever stands there,
@@ -198,7 +222,7 @@ class ObjectReader {
     }
 
     [[noreturn]] void fail(const std::string& where, const std::string& what) const {
-        throw FieldError(source_ + ": " + where + " " + what);
+        throw FieldError(source_ + ": " + printable(where, 160) + " " + what);
     }
     std::string at(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
     /// Refuses a number the file wrote that is not finite (1e400, NaN): `range` is the field's allowed range.
@@ -256,7 +280,7 @@ class ObjectReader {
         }
         const std::string s = j_[key].get<std::string>();
         if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), s) == allowed.end())
-            fail(at(key), "= \"" + s + "\" is not one of " + list);
+            fail(at(key), "= \"" + printable(s, 60) + "\" is not one of " + list);
         if (s.size() > 4096) fail(at(key), "is longer than 4096 characters");
         return s;
     }
@@ -502,7 +526,7 @@ SceneSpec parse_scene(const std::string& text, const std::string& source) try {
     root.finish();
     // Every field was read or refused above, so a non-finite number has been reported; this is a safety net.
     if (!non_finite.empty())
-        throw InvalidInput(source + ": " + non_finite.begin()->first + " = " + shorten(non_finite.begin()->second) +
+        throw InvalidInput(source + ": " + printable(non_finite.begin()->first, 160) + " = " + shorten(non_finite.begin()->second) +
                            " is not a finite number");
 
     const std::size_t particles = scene_particle_count(s);
