@@ -11,6 +11,7 @@ packages=(
   libimgui-dev nlohmann-json3-dev libcli11-dev libstb-dev libtinyobjloader-dev
   xvfb xauth mesa-utils
   python3-matplotlib
+  clang libclang-rt-14-dev
 )
 
 missing=()
