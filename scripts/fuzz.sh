@@ -2,6 +2,7 @@
 # Fuzzes the scene loader (fuzz/fuzz_scene.cpp) with libFuzzer under ASan + UBSan for SECONDS (default 60), starting
 # from the seed corpus fuzz/corpus/scene. Builds the 'fuzz' CMake preset (clang++) in build/fuzz first. The corpus is
 # copied to a temporary directory, so the repository is not modified; inputs that crash are kept in build/fuzz/crashes.
+# fuzz/scene.dict (the format's keys, JSON literals, edge numbers) guides the mutations.
 # Exit 0 when the run ends without a crash, non-zero (and the crash's reproducer path) otherwise.
 # Usage: scripts/fuzz.sh [SECONDS] [extra libFuzzer flags...]      (needs clang and libclang-rt-14-dev: scripts/setup.sh)
 set -euo pipefail
@@ -36,7 +37,7 @@ echo "== fuzz: drape_fuzz_scene for $seconds s on $(ls "$work/corpus" | wc -l) s
 set +e
 ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:symbolize=1} \
 UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1} \
-    build/fuzz/drape_fuzz_scene "$work/corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+    build/fuzz/drape_fuzz_scene "$work/corpus" -dict=fuzz/scene.dict -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
     -max_len=65536 -print_final_stats=1 -artifact_prefix="$crashes/" "$@" 2>&1 | tee "$work/log" |
     grep -avE '^#[0-9]+.*(NEW|REDUCE)|^\s+NEW_FUNC|^"|^###### (Recommended|End of recommended)'
 status=${PIPESTATUS[0]}
