@@ -253,6 +253,25 @@ TEST(Scenes, OnlyInvalidInputEscapesTheParser) {
     }
 }
 
+// One line of reasonable length whatever the file holds: keys and values with control characters are escaped, a
+// syntax error 5,000 arrays deep names a shortened path (the fuzzer's first find: a 10,939-character message).
+TEST(Scenes, MessagesStayOneShortLine) {
+    const std::string deep = "{\"cloth\": " + std::string(5000, '[') + "-";
+    const std::string long_key = "{\"cloth\": {\"" + std::string(100000, 'k') + "\": 1}}";
+    for (const std::string& text : {deep, long_key, std::string("{\"cloth\": {\"a\\nb\": 1}}"),
+                                    std::string("{\"cloth\": {\"pins\": \"x\\u000dy\"}}"),
+                                    std::string("{\"cloth\": {\"n\": 10\n\n  \"size\": 1}}")}) {
+        const std::string msg = error_of(text);
+        EXPECT_TRUE(has(msg, "test.json: ")) << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+        EXPECT_EQ(msg.find('\r'), std::string::npos) << msg;
+        EXPECT_LT(msg.size(), 1000u) << msg.substr(0, 300);
+    }
+    EXPECT_TRUE(has(error_of("{\"cloth\": {\"a\\nb\": 1}}"), "cloth.a\\u000ab is not a known field"))
+        << error_of("{\"cloth\": {\"a\\nb\": 1}}");
+    EXPECT_TRUE(has(error_of(deep), "malformed JSON (near cloth[0][0][0]")) << error_of(deep);
+}
+
 // The scene path is checked before it is opened: a FIFO would block the open forever, a directory "opens".
 TEST(Scenes, ScenePathMustBeARegularFile) {
     const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("drape_scene_path_" + std::to_string(::getpid()));
