@@ -72,7 +72,7 @@ FrameRecorder::FrameRecorder(std::string target, int width, int height)
                                " needs ffmpeg on PATH (apt install ffmpeg), or give a directory for PNG frames");
         const std::filesystem::path parent = std::filesystem::path(target_).parent_path();
         if (!parent.empty() && !std::filesystem::is_directory(parent))
-            throw InvalidInput("record: cannot write '" + target_ + "': no directory '" + parent.string() + "'");
+            throw WriteError("record: cannot write '" + target_ + "': no directory '" + parent.string() + "'");
         // ffmpeg exiting early must not kill the viewer with SIGPIPE: writes then fail with EPIPE instead.
         std::signal(SIGPIPE, SIG_IGN);
         // ffmpeg's own messages go to a log file, so a failure is reported as one line naming the target.
@@ -90,13 +90,13 @@ FrameRecorder::FrameRecorder(std::string target, int width, int height)
         if (!pipe_) {
             std::error_code ec;
             if (!ffmpeg_log_.empty()) std::filesystem::remove(ffmpeg_log_, ec);
-            throw InvalidInput("record: cannot start ffmpeg for '" + target_ + "'");
+            throw WriteError("record: cannot start ffmpeg for '" + target_ + "'");
         }
     } else {
         std::error_code ec;
         std::filesystem::create_directories(target_, ec);
         if (ec || !std::filesystem::is_directory(target_))
-            throw InvalidInput("record: cannot create the directory '" + target_ + "'" +
+            throw WriteError("record: cannot create the directory '" + target_ + "'" +
                                (ec ? ": " + ec.message() : std::string()));
     }
     // Every buffer now: the frame loop allocates nothing while recording.

@@ -1,8 +1,13 @@
 // The `drape` executable: command-line front end.
 //   drape run ...   headless run of a scene with machine-readable figures (see run_command.hpp)
 //   drape view ...  the real-time viewer (see view_command.hpp); `drape` with no arguments opens it
-// Exit codes: 0 ok, 2 bad input (one line naming the flag and its allowed range), 3 simulation became non-finite.
+// Exit codes (drape::exit_code, docs/user_guide.md): 0 ok, 1 internal error, 2 bad input (one line naming the flag
+// or file field and its allowed range), 3 simulation became non-finite, 4 blow-up, 5 an output could not be written.
+#include <cerrno>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <type_traits>
 #include <iostream>
 #include <sstream>
 #include <string>
@@ -16,18 +21,38 @@
 
 namespace {
 
-/// A CLI11 validator whose message states the allowed range (and unit) in one line.
+/// A CLI11 validator whose message states the allowed range (and unit) in one line. Integer options take whole
+/// numbers only ("3.5" and "1e3" are refused as not whole); floating-point options refuse NaN and infinities.
 template <class T> CLI::Validator in_range(T lo, T hi, const std::string& unit = "") {
     std::ostringstream desc;
     desc << "[" << lo << ", " << hi << "]" << unit;
     const std::string range = desc.str();
     return CLI::Validator(
         [lo, hi, range](std::string& text) -> std::string {
-            T value{};
-            std::istringstream in(text);
-            in >> value;
-            if (in.fail() || !in.eof()) return "'" + text + "' is not a number; allowed range " + range;
-            if (!(value >= lo && value <= hi)) return "value " + text + " is outside the allowed range " + range;
+            // Any number first (strtod: also 1e400, inf, nan), then the type's own reading.
+            errno = 0;
+            char* end = nullptr;
+            const double any = std::strtod(text.c_str(), &end);
+            const bool numeric = !text.empty() && end == text.c_str() + text.size() && !std::isspace(text[0]);
+            if (!numeric) return "'" + text + "' is not a number; allowed range " + range;
+            if (std::isnan(any)) return "'" + text + "' is not a number; allowed range " + range;
+            if constexpr (std::is_integral_v<T>) {
+                if (std::isfinite(any) && any != std::floor(any))
+                    return "'" + text + "' must be a whole number in " + range;
+                T value{};
+                std::istringstream in(text);
+                in >> value;
+                if (in.fail() || !in.eof()) {
+                    if (!(any >= double(lo) && any <= double(hi)))
+                        return "value " + text + " is outside the allowed range " + range;
+                    return "'" + text + "' must be a whole number written with digits only, in " + range;
+                }
+                if (text[0] == '-' && lo >= T{0}) return "value " + text + " is outside the allowed range " + range;
+                if (!(value >= lo && value <= hi)) return "value " + text + " is outside the allowed range " + range;
+            } else {
+                if (!(any >= double(lo) && any <= double(hi)))
+                    return "value " + text + " is outside the allowed range " + range;
+            }
             return {};
         },
         range);
@@ -185,10 +210,19 @@ int main(int argc, char** argv) {
 #endif
     } catch (const drape::InvalidInput& e) {
         std::fprintf(stderr, "drape: %s\n", e.what());
-        return 2;
+        return drape::exit_code::bad_input;
     } catch (const std::bad_alloc&) {
         std::fprintf(stderr, "drape: out of memory building the scene; choose a smaller --size\n");
-        return 2;
+        return drape::exit_code::bad_input;
+    } catch (const drape::WriteError& e) {
+        std::fprintf(stderr, "drape: %s\n", e.what());
+        return drape::exit_code::write_failed;
+    } catch (const std::exception& e) { // a bug: said plainly, never an abort
+        std::fprintf(stderr, "drape: internal error: %s\n", e.what());
+        return drape::exit_code::internal;
+    } catch (...) {
+        std::fprintf(stderr, "drape: internal error: an unknown exception\n");
+        return drape::exit_code::internal;
     }
-    return 0;
+    return drape::exit_code::ok;
 }

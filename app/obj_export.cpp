@@ -16,7 +16,7 @@ ObjExporter::ObjExporter(const Cloth& cloth, std::string directory)
     std::error_code ec;
     std::filesystem::create_directories(directory_, ec);
     if (ec || !std::filesystem::is_directory(directory_))
-        throw InvalidInput("--export-obj: cannot create directory '" + directory_ + "': " + ec.message());
+        throw WriteError("--export-obj: cannot create directory '" + directory_ + "': " + ec.message());
 }
 
 std::string ObjExporter::write(const Simulation& sim, std::size_t index) {
@@ -25,8 +25,8 @@ std::string ObjExporter::write(const Simulation& sim, std::size_t index) {
     const std::string path = (std::filesystem::path(directory_) / name).string();
     try {
         write_obj_file(path, sim, *publisher_, planes_, index);
-    } catch (const InvalidInput& e) {
-        throw InvalidInput(std::string("--export-obj: ") + e.what());
+    } catch (const WriteError& e) {
+        throw WriteError(std::string("--export-obj: ") + e.what());
     }
     return path;
 }
@@ -36,7 +36,7 @@ void write_obj_file(const std::string& path, const Simulation& sim, Publisher& p
     if (scratch.size() < publisher.output_floats()) scratch.resize(publisher.output_floats());
     publisher.publish(sim.x(), sim.y(), sim.z(), scratch);
     std::FILE* f = std::fopen(path.c_str(), "wb");
-    if (!f) throw InvalidInput("cannot write '" + path + "': " + std::strerror(errno));
+    if (!f) throw WriteError("cannot write '" + path + "' (" + std::strerror(errno) + ")");
     const std::vector<std::uint32_t>& triangles = sim.cloth().triangles;
     const std::size_t n = publisher.particle_count(), stride = publisher.plane_floats();
     const float* p = scratch.data();
@@ -59,7 +59,7 @@ void write_obj_file(const std::string& path, const Simulation& sim, Publisher& p
         std::fprintf(f, "f %u//%u %u//%u %u//%u\n", a, a, b, b, c, c);
     }
     const bool ok = std::ferror(f) == 0;
-    if (std::fclose(f) != 0 || !ok) throw InvalidInput("error writing '" + path + "' (disk full?)");
+    if (std::fclose(f) != 0 || !ok) throw WriteError("error writing '" + path + "' (disk full?)");
 }
 
 } // namespace drape::app

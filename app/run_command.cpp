@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <optional>
 #include <sstream>
@@ -12,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "drape/memory_estimate.hpp"
 #include "drape/scene.hpp"
 #include "obj_export.hpp"
 #include "drape/simulation.hpp"
@@ -33,11 +35,14 @@ std::string hex64(std::uint64_t v) {
 /// Progress on stderr, only when it is a terminal and the run has lasted over 2 s.
 class Progress {
   public:
-    explicit Progress(std::uint64_t total) : total_(total), tty_(isatty(STDERR_FILENO) != 0) {}
+    explicit Progress(std::uint64_t total) : total_(total), tty_(isatty(STDERR_FILENO) != 0) {
+        // DRAPE_PROGRESS_AFTER: seconds before the first report (default 2; tests use 0).
+        if (const char* after = std::getenv("DRAPE_PROGRESS_AFTER")) delay_ = std::atof(after);
+    }
     void update(std::uint64_t done) {
         if (!tty_) return;
         const double elapsed = std::chrono::duration<double>(clock_type::now() - start_).count();
-        if (elapsed < 2.0 || elapsed - last_ < 0.25) return;
+        if (elapsed < delay_ || (shown_ && elapsed - last_ < 0.25)) return;
         last_ = elapsed;
         const double left = done ? elapsed * double(total_ - done) / double(done) : 0.0;
         std::fprintf(stderr, "\rdrape: substep %llu/%llu (%3.0f%%), %.1f s elapsed, ~%.1f s left   ",
@@ -45,15 +50,19 @@ class Progress {
                      100.0 * double(done) / double(total_), elapsed, left);
         shown_ = true;
     }
-    ~Progress() {
-        if (shown_) std::fprintf(stderr, "\n");
+    /// Erases the progress line (carriage return, clear to end of line), so that what follows starts on a clean line.
+    void clear() {
+        if (shown_) std::fprintf(stderr, "\r\033[K");
+        shown_ = false;
     }
+    ~Progress() { clear(); }
 
   private:
     std::uint64_t total_;
     bool tty_;
     bool shown_ = false;
     double last_ = 0.0;
+    double delay_ = 2.0;
     clock_type::time_point start_ = clock_type::now();
 };
 
@@ -73,10 +82,17 @@ int run_command(const RunOptions& o) {
         throw InvalidInput(std::string("--scene: ") + e.what());
     }
     for (const std::string& w : spec.warnings) std::cerr << "drape run: warning: " << w << "\n";
+    bool size_ignored = false;
     if (o.size) {
         if (spec.cloth == ClothType::mesh)
             throw InvalidInput("--size: the scene's cloth is a mesh; its resolution is that of its OBJ file");
-        if (spec.cloth == ClothType::grid) {
+        if (spec.cloth == ClothType::outline) {
+            // An outline's resolution is its cloth.spacing: --size does not apply (reported, not silently dropped).
+            size_ignored = true;
+            std::fprintf(stderr, "drape run: --size %u is ignored for an outline cloth (cloth.spacing = %g m sets "
+                                 "its resolution)\n",
+                         *o.size, double(spec.outline.spacing));
+        } else if (spec.cloth == ClothType::grid) {
             if (*o.size < hang_min_n || *o.size > hang_max_n)
                 throw InvalidInput("--size: value " + std::to_string(*o.size) + " is outside the allowed range [" +
                                    std::to_string(hang_min_n) + ", " + std::to_string(hang_max_n) + "]");
@@ -101,14 +117,19 @@ int run_command(const RunOptions& o) {
     spec.physics.kernel = o.kernel == "grid" ? KernelPath::grid : o.kernel == "csr" ? KernelPath::csr : KernelPath::automatic;
     spec.physics.fused = !o.staged;
     if (o.dt) spec.dt = static_cast<float>(*o.dt);
+    const std::string size_flag = o.size && !size_ignored ? "--size " + std::to_string(*o.size) : "--scene " + o.scene;
     const std::size_t expected = scene_particle_count(spec);
     if (expected > (std::size_t{1} << 24))
-        throw InvalidInput("--size: the cloth would have " + std::to_string(expected) + " particles (at most 16,777,216)");
+        throw InvalidInput(size_flag + ": the cloth would have " + std::to_string(expected) +
+                           " particles (at most 16,777,216)");
+    check_scene_memory(spec, size_flag); // refused at once, with the figure, instead of failing half-way
 
     BuiltScene scene = workers.run([&] { return build_scene(spec); });
     SimulationParams sp = scene.params;
     const StabilityBound bound = stability_bound(scene.cloth, sp.air_drag);
     const bool dt_default = !spec.dt.has_value();
+    // A dt above the bound: the message names where it came from (the flag, or the scene file's field).
+    if (!dt_default) check_stability(scene.cloth, sp, o.dt ? std::string("--dt") : spec.source + ": physics.dt");
 
     std::uint64_t steps = 1000;
     if (o.steps) steps = *o.steps;
@@ -147,6 +168,7 @@ int run_command(const RunOptions& o) {
     } catch (const SimulationError& e) {
         error = e.what();
     }
+    progress.clear();
     const double wall = std::chrono::duration<double>(clock_type::now() - start).count();
     const Health health = workers.run([&] { return sim.health(); });
     const std::uint64_t done = sim.steps_done();
@@ -154,10 +176,17 @@ int run_command(const RunOptions& o) {
 
     nlohmann::ordered_json j;
     j["scene"] = spec.name;
+    j["cloth"] = spec.cloth == ClothType::grid     ? "grid"
+                 : spec.cloth == ClothType::tshirt ? "tshirt"
+                 : spec.cloth == ClothType::mesh   ? "mesh"
+                                                   : "outline";
     if (spec.cloth == ClothType::grid)
         j["n"] = spec.grid.n;
-    else
+    else if (spec.cloth == ClothType::tshirt)
         j["cells_per_metre"] = spec.tshirt.cells_per_metre;
+    else if (spec.cloth == ClothType::outline)
+        j["spacing"] = spec.outline.spacing;
+    if (size_ignored) j["size_ignored"] = *o.size;
     j["particles"] = particles;
     j["springs"] = sim.cloth().spring_count();
     j["threads"] = threads;
@@ -165,7 +194,7 @@ int run_command(const RunOptions& o) {
     j["substeps"] = done;
     j["dt"] = sp.dt;
     j["dt_max"] = bound.dt_max;
-    j["dt_source"] = dt_default ? "default: 0.9 x stability bound" : "--dt";
+    j["dt_source"] = dt_default ? "default: 0.9 x stability bound" : o.dt ? "--dt" : "scene: physics.dt";
     j["sim_seconds"] = sim.time();
     j["integrator"] = integrator_name(sp.integrator);
     j["kernel"] = kernel_path_name(sim.kernel());
@@ -196,8 +225,9 @@ int run_command(const RunOptions& o) {
         std::printf("drape run: scene %s, %zu particles, %zu springs, %d thread(s), kernel %s%s\n",
                     spec.name.c_str(), particles, sim.cloth().spring_count(), threads,
                     kernel_path_name(sim.kernel()), sp.fused ? " (fused)" : " (staged)");
-        std::printf("  integrator %s, dt %.4g s (%s; bound %.4g s), %llu substeps = %.4g s simulated\n",
-                    integrator_name(sp.integrator), double(sp.dt), dt_default ? "default" : "--dt", bound.dt_max,
+        std::printf("  integrator %s, dt %s s (%s; bound %s s), %llu substeps = %.4g s simulated\n",
+                    integrator_name(sp.integrator), format_dt(sp.dt).c_str(),
+                    dt_default ? "default" : o.dt ? "--dt" : "scene's physics.dt", format_dt(bound.dt_max).c_str(),
                     static_cast<unsigned long long>(done), sim.time());
         std::printf("  wall %.3f s, %.4g particle-substeps/s\n", wall, rate);
         std::printf("  max structural strain %.4f, kinetic energy %.4g J, finite %s, checksum %s\n",

@@ -28,8 +28,17 @@ int view_command(const ViewOptions& options) {
     } catch (const std::bad_alloc&) {
         std::fprintf(stderr, "drape view: out of memory building the scene; choose a smaller --size\n");
         return exit_code::bad_input;
-    } catch (const std::runtime_error& e) {
+    } catch (const WriteError& e) { // a screenshot (or another output) could not be written
         std::fprintf(stderr, "drape view: %s\n", e.what());
+        return exit_code::write_failed;
+    } catch (const BlowUpError& e) {
+        std::fprintf(stderr, "drape view: %s\n", e.what());
+        return exit_code::blow_up;
+    } catch (const SimulationError& e) {
+        std::fprintf(stderr, "drape view: %s\n", e.what());
+        return exit_code::non_finite;
+    } catch (const std::exception& e) { // OpenGL set-up failures and bugs: said plainly, never an abort
+        std::fprintf(stderr, "drape view: internal error: %s\n", e.what());
         return exit_code::internal;
     }
 }

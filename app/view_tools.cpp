@@ -158,7 +158,7 @@ void Viewer::export_obj(const std::string& path) {
                                                std::to_string(session_->sim().cloth().particle_count) +
                                                " vertices)");
         std::fprintf(stderr, "drape view: exported %s\n", path.c_str());
-    } catch (const InvalidInput& e) {
+    } catch (const std::exception& e) {
         tools_.write_failed = true;
         session_->post(MessageLevel::error, std::string("OBJ export failed: ") + e.what());
         std::fprintf(stderr, "drape view: OBJ export failed: %s\n", e.what());
@@ -175,7 +175,7 @@ void Viewer::start_recording(const std::string& target) {
         session_->post(MessageLevel::info, "recording " + std::string(r.video() ? "video " : "PNG frames ") +
                                                "to " + target + " (" + std::to_string(r.width()) + " x " +
                                                std::to_string(r.height()) + "); V stops");
-    } catch (const InvalidInput& e) {
+    } catch (const std::exception& e) {
         tools_.write_failed = true;
         session_->post(MessageLevel::error, e.what());
         std::fprintf(stderr, "drape view: %s\n", e.what());

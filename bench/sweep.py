@@ -1,5 +1,7 @@
 #!/usr/bin/python3
-"""Runs drape's Google Benchmark binary (or reads its JSON) and writes the figures of BENCH.md under docs/bench/:
+"""Runs drape's Google Benchmark binary (or reads its JSON) and writes the figures of BENCH.md into an output
+directory: build/bench by default, so that a trial run never overwrites the committed figures; `--out docs/bench`
+refreshes those explicitly.
 
   hang.json        raw Google Benchmark JSON of the run (not written with --from-json)
   hang.csv         one row per benchmark: name, kind, stage, N, particles, threads, particle_substeps_per_second,
@@ -9,10 +11,11 @@
   table.md         Markdown table (N, particles, threads, throughput, scaling), also printed on stdout
 
 Examples:
-  bench/sweep.py                                      # full sweep with build/release/drape_bench (a few minutes)
+  bench/sweep.py                                      # full sweep with build/release/drape_bench -> build/bench
+  bench/sweep.py --repetitions 3 --out docs/bench     # the committed figures (a few minutes)
   bench/sweep.py --bench build/tools-release/drape_bench --filter 'BM_Substep/N:(32|100)/'
   bench/sweep.py --repetitions 3                      # medians of 3 runs per benchmark
-  bench/sweep.py --from-json docs/bench/hang.json     # redraw from an earlier run, no benchmarking
+  bench/sweep.py --from-json docs/bench/hang.json --out docs/bench   # redraw from an earlier run, no benchmarking
 
 Uses Debian's python3 with python3-matplotlib (scripts/setup.sh installs it); plots use the Agg backend (no display).
 """
@@ -30,7 +33,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_BENCH = ROOT / "build" / "release" / "drape_bench"
-DEFAULT_OUT = ROOT / "docs" / "bench"
+DEFAULT_OUT = ROOT / "build" / "bench"
 STAGE_NAMES = {0: "external_forces", 1: "spring_forces", 2: "integrate"}
 CSV_FIELDS = ["name", "kind", "stage", "N", "particles", "threads", "particle_substeps_per_second", "real_time",
               "label", "time_unit", "repetitions", "statistic"]
@@ -48,7 +51,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument("--from-json", metavar="FILE", help="read this Google Benchmark JSON instead of running")
     p.add_argument("--filter", help="passed as --benchmark_filter (a regular expression over benchmark names)")
     p.add_argument("--repetitions", type=int, help="passed as --benchmark_repetitions; medians are reported")
-    p.add_argument("--out-dir", default=str(DEFAULT_OUT), help="output directory (default: docs/bench)")
+    p.add_argument("--out", "--out-dir", dest="out_dir", default=str(DEFAULT_OUT),
+                   help="output directory (default: build/bench; the committed figures: --out docs/bench)")
     p.add_argument("bench_args", nargs="*", help="after --: further arguments for the benchmark binary")
     args = p.parse_args(argv)
     if args.repetitions is not None and args.repetitions < 1:

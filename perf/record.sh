@@ -115,21 +115,21 @@ if [[ "$stat" != 0 ]]; then
 fi
 
 # --- report -----------------------------------------------------------------------------------------------------------
-# Long C++ names are cut at 200 characters (full names: perf report -i perf/out/perf.data).
+# Long C++ names are cut at 200 characters (full names: perf report -i $OUT/perf.data).
 report() {
     perf report -i "$OUT/perf.data" --stdio "$@" 2>/dev/null |
         awk '{ sub(/[ \t]+$/, "") } /^# *$|^# \.\.|^# \(Tip:|^# To display/ { next }
              { if (length($0) > 200) $0 = substr($0, 1, 197) "..."; print }'
 }
 say "writing perf.script.txt"
-# No symbol offsets (+0x..): frames of one function merge in the viewers. Offsets: perf script -i perf/out/perf.data
+# No symbol offsets (+0x..): frames of one function merge in the viewers. Offsets: perf script -i $OUT/perf.data
 perf script -i "$OUT/perf.data" -F comm,tid,time,period,event,ip,sym,dso >"$OUT/perf.script.txt" 2>"$OUT/script.log" ||
     { cat "$OUT/script.log" >&2; die "perf script failed"; }
 
 say "writing report.txt"
 {
     echo "drape perf profile  $(date -u '+%Y-%m-%d %H:%M UTC')  git $(git_rev)  host: $(nproc) cpu(s), $(uname -r)"
-    echo "command: perf record -e $event -F $freq --call-graph $call_graph -o perf/out/perf.data -- ${run_cmd[*]#"$ROOT/"}"
+    echo "command: perf record -e $event -F $freq --call-graph $call_graph -o ${OUT#"$ROOT/"}/perf.data -- ${run_cmd[*]#"$ROOT/"}"
     echo
     sed 's/^/  /' "$OUT/run.txt"
     echo

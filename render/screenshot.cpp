@@ -1,10 +1,14 @@
 #include "screenshot.hpp"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <stdexcept>
 
 #include <glad/gl.h>
 #include <stb_image_write.h>
+
+#include "drape/errors.hpp"
 
 namespace drape::render {
 
@@ -25,15 +29,19 @@ void read_back_rgb(int width, int height, std::vector<unsigned char>& out_rgb) {
 }
 
 void write_png_rgb(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb) {
+    errno = 0;
     if (!stbi_write_png(path.c_str(), width, height, 3, rgb.data(), width * 3))
-        throw std::runtime_error("cannot write the PNG " + path);
+        throw WriteError("cannot write the PNG " + path +
+                         (errno ? std::string(" (") + std::strerror(errno) + ")" : std::string()));
 }
 
 void save_screenshot_png(const std::string& path, int width, int height) {
     std::vector<unsigned char> pixels;
     read_back_rgb(width, height, pixels);
+    errno = 0;
     if (!stbi_write_png(path.c_str(), width, height, 3, pixels.data(), width * 3))
-        throw std::runtime_error("cannot write the screenshot " + path);
+        throw WriteError("cannot write the screenshot " + path +
+                         (errno ? std::string(" (") + std::strerror(errno) + ")" : std::string()));
 }
 
 } // namespace drape::render

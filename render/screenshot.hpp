@@ -16,7 +16,7 @@ void read_back_rgb(int width, int height, std::vector<unsigned char>& out_rgb);
 void write_png_rgb(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb);
 
 /// Reads width x height RGB pixels of the back buffer and writes them to `path` (rows flipped so the PNG is
-/// upright). Throws std::runtime_error naming the path when it cannot be written.
+/// upright). Throws drape::WriteError naming the path when it cannot be written.
 void save_screenshot_png(const std::string& path, int width, int height);
 
 } // namespace drape::render

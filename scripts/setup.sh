@@ -12,6 +12,7 @@ packages=(
   xvfb xauth mesa-utils xdotool
   python3-matplotlib
   ffmpeg # the viewer's .mp4 recording (optional at run time; tests/viewer_tools.py checks it when present)
+  clang libclang-rt-14-dev
 )
 
 missing=()

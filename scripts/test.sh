@@ -1,17 +1,32 @@
 #!/usr/bin/env bash
-# Builds drape and runs every test: the Release build (ctest), then the whole suite again under
-# AddressSanitizer + UndefinedBehaviorSanitizer (asan preset). Run scripts/setup.sh first on a fresh machine.
-# Usage: scripts/test.sh [--no-asan]
+# Builds drape and runs every test: the Release build (ctest), a one-minute fuzz run of the scene loader (libFuzzer
+# under ASan + UBSan with its seed corpus, scripts/fuzz.sh), then the whole suite again under AddressSanitizer +
+# UndefinedBehaviorSanitizer (asan preset). Run scripts/setup.sh first on a fresh machine.
+# Usage: scripts/test.sh [--no-fuzz] [--no-asan]      (DRAPE_FUZZ_SECONDS: length of the fuzz run, default 60)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=${DRAPE_JOBS:-$(nproc)}
+fuzz=1
+asan=1
+for arg in "$@"; do
+    case "$arg" in
+    --no-fuzz) fuzz=0 ;;
+    --no-asan) asan=0 ;;
+    *) echo "test.sh: unknown option '$arg' (options: --no-fuzz, --no-asan)" >&2; exit 2 ;;
+    esac
+done
 
 echo "== release: configure, build, test"
 cmake --preset release >/dev/null
 cmake --build --preset release -j "$jobs"
 ctest --preset release -j 1
 
-if [ "${1:-}" != "--no-asan" ]; then
+if [ "$fuzz" = 1 ]; then
+    echo "== fuzz: the scene loader for ${DRAPE_FUZZ_SECONDS:-60} s (libFuzzer, ASan + UBSan)"
+    DRAPE_JOBS=$jobs scripts/fuzz.sh "${DRAPE_FUZZ_SECONDS:-60}"
+fi
+
+if [ "$asan" = 1 ]; then
     echo "== asan (ASan + UBSan): configure, build, test"
     cmake --preset asan >/dev/null
     cmake --build --preset asan -j "$jobs"

@@ -8,21 +8,22 @@ err=$(mktemp)
 out=$(mktemp)
 trap 'rm -f "$err" "$out"' EXIT
 
-expect_error() { # expect_error "what must appear in the message" args...
-    local want=$1
-    shift
-    "$DRAPE" "$@" >"$out" 2>"$err"
+expect_exit() { # expect_exit CODE "what must appear in the message" args...: one line on stderr, never a hang
+    local want_code=$1 want=$2
+    shift 2
+    timeout 60 "$DRAPE" "$@" >"$out" 2>"$err"
     local code=$?
     local lines
     lines=$(wc -l <"$err")
-    if [ "$code" != 2 ] || [ "$lines" != 1 ] || ! grep -qF -- "$want" "$err"; then
-        echo "FAIL: drape $* -> exit $code, $lines line(s) on stderr, expected exit 2 and one line with '$want':"
+    if [ "$code" != "$want_code" ] || [ "$lines" != 1 ] || ! grep -qF -- "$want" "$err"; then
+        echo "FAIL: drape $* -> exit $code, $lines line(s) on stderr, expected exit $want_code and one line with '$want':"
         cat "$err"
         fail=1
     else
         echo "ok: drape $* -> $(cat "$err")"
     fi
 }
+expect_error() { expect_exit 2 "$@"; } # expect_error "what must appear in the message" args...
 
 expect_error "--size" run --size 1
 expect_error "[2, 4096]" run --size 5000
@@ -50,8 +51,128 @@ echo '{"cloth": ' >"$tmpdir/malformed.json"
 expect_error "cloth.n" run --scene "$tmpdir/huge.json"
 expect_error "cloth.colour is not a known field" run --scene "$tmpdir/unknown.json"
 expect_error "malformed JSON" run --scene "$tmpdir/malformed.json"
-expect_error "cannot open" run --scene "$tmpdir/missing.json"
+expect_error "does not exist" run --scene "$tmpdir/missing.json"
 expect_error "--every" run --every 5
+expect_error "--size: '3.5' must be a whole number in [2, 4096]" run --size 3.5
+expect_error "--dt: value 1e400 is outside the allowed range" run --dt 1e400
+expect_error "--stiffness: 'nan' is not a number" run --stiffness nan
+
+# Numbers a double cannot hold, NaN and Infinity: a range error naming the file and the JSON path, never an abort.
+echo '{"cloth": {"n": 1e400}}' >"$tmpdir/overflow.json"
+echo '{"physics": {"gravity": [0, -1e400, 0]}}' >"$tmpdir/gravity.json"
+printf '{"cloth": {"n": 1%0400d}}\n' 0 >"$tmpdir/digits.json"
+echo '{"cloth": {"size": NaN}}' >"$tmpdir/nan.json"
+echo '{"material": {"stiffness": Infinity}}' >"$tmpdir/inf.json"
+expect_error "overflow.json: cloth.n = 1e400 is not a finite number; allowed range [2, 4096]" run --scene "$tmpdir/overflow.json"
+expect_error "gravity.json: physics.gravity[1] = -1e400 is not a finite number; allowed range [-100, 100] m/s^2" \
+    run --scene "$tmpdir/gravity.json"
+expect_error "digits.json: cloth.n = 10000000000" run --scene "$tmpdir/digits.json"
+expect_error "nan.json: cloth.size = NaN is not a finite number; allowed range [0.01, 100] m" run --scene "$tmpdir/nan.json"
+expect_error "inf.json: material.stiffness = Infinity is not a finite number" run --scene "$tmpdir/inf.json"
+
+# The scene path is checked before it is opened: a FIFO does not hang, a directory is not "larger than 16 MiB".
+mkfifo "$tmpdir/fifo.json"
+mkdir "$tmpdir/dir.json"
+head -c $((16 * 1024 * 1024 + 1)) /dev/zero >"$tmpdir/big.json"
+expect_error "fifo.json: is not a regular file (a FIFO)" run --scene "$tmpdir/fifo.json"
+expect_error "dir.json: is a directory" run --scene "$tmpdir/dir.json"
+expect_error "big.json: the file is 16.0 MiB; scene files are limited to 16 MiB" run --scene "$tmpdir/big.json"
+cp "$tmpdir/unknown.json" "$tmpdir/locked.json"
+chmod 000 "$tmpdir/locked.json"
+if [ "$(id -u)" != 0 ]; then
+    expect_error "locked.json: the scene file cannot be read (permission denied)" run --scene "$tmpdir/locked.json"
+elif command -v setpriv >/dev/null && setpriv --reuid=65534 --regid=65534 --clear-groups "$DRAPE" --version >/dev/null 2>&1; then
+    # root reads anything: the check runs as nobody
+    chmod 711 "$tmpdir"
+    DRAPE_AS_ROOT=$DRAPE
+    printf '#!/bin/sh\nexec setpriv --reuid=65534 --regid=65534 --clear-groups "%s" "$@"\n' "$DRAPE" >"$tmpdir/as_nobody"
+    chmod 755 "$tmpdir/as_nobody"
+    DRAPE="$tmpdir/as_nobody"
+    expect_error "locked.json: the scene file cannot be read (permission denied)" run --scene "$tmpdir/locked.json"
+    DRAPE=$DRAPE_AS_ROOT
+    chmod 700 "$tmpdir"
+else
+    echo "skip: unreadable scene file (running as root without setpriv)"
+fi
+
+# Outlines: a self-crossing outline is named as such; a limit or a thin outline names the file and the field.
+echo '{"cloth": {"type": "outline", "outline": [[0,0],[1,1],[1,0],[0,1]]}}' >"$tmpdir/bowtie.json"
+echo '{"cloth": {"type": "outline", "outline": [[0,0],[50,0],[50,50],[0,50]], "spacing": 0.02}}' >"$tmpdir/many.json"
+echo '{"cloth": {"type": "outline", "outline": [[0,0],[1,0],[1,1e-9]], "spacing": 0.3}}' >"$tmpdir/thin.json"
+expect_error "bowtie.json: cloth.outline: outline is self-intersecting: edge 0 (vertices 0-1) meets edge 2" \
+    run --scene "$tmpdir/bowtie.json"
+expect_error "many.json: cloth.spacing = 0.02 m gives this outline up to 626" \
+    run --scene "$tmpdir/many.json"
+expect_error "points per panel; at most 4000000 are allowed (raise the spacing)" run --scene "$tmpdir/many.json"
+expect_error "thin.json: cloth.outline at cloth.spacing = 0.3 m: outline panel has no triangle" run --scene "$tmpdir/thin.json"
+
+# dt above the bound names where it came from; the bound as printed (JSON or text) is accepted back as --dt.
+echo '{"cloth": {"n": 100}, "physics": {"dt": 0.01}}' >"$tmpdir/dt.json"
+expect_error "dt.json: physics.dt = 0.01 s is above the explicit stability bound" run --scene "$tmpdir/dt.json"
+expect_error "--dt = 0.01 s is above the explicit stability bound" run --size 100 --dt 0.01
+json_bound=$("$DRAPE" run --size 100 --steps 1 --json | python3 -c "import json,sys; print(json.load(sys.stdin)['dt_max'])")
+text_bound=$("$DRAPE" run --size 100 --steps 1 | sed -n 's/.*bound \([0-9.e+-]*\) s).*/\1/p')
+for b in "$json_bound" "$text_bound"; do
+    if "$DRAPE" run --size 100 --steps 5 --dt "$b" >"$out" 2>"$err"; then
+        echo "ok: the printed bound $b is accepted as --dt"
+    else
+        echo "FAIL: the printed bound '$b' is refused as --dt:"; cat "$err"; fail=1
+    fi
+done
+
+# Output that cannot be written: exit 5 with one line.
+expect_exit 5 "--export-obj: cannot create directory" run --steps 1 --export-obj /dev/null/frames
+
+# drape view: a screenshot that cannot be written is exit 5 with one line (needs the viewer and Xvfb).
+if command -v xvfb-run >/dev/null && "$DRAPE" view --help >/dev/null 2>&1 &&
+    ! "$DRAPE" view --frames 1 2>&1 | grep -q "this build has no viewer"; then
+    xvfb-run -a -s "-screen 0 1280x800x24" "$DRAPE" view --frames 3 --screenshot /dev/null/x.png >"$out" 2>"$err"
+    code=$?
+    if [ "$code" = 5 ] && [ "$(wc -l <"$err")" = 1 ] && grep -qF "cannot write the screenshot /dev/null/x.png" "$err"; then
+        echo "ok: drape view --screenshot /dev/null/x.png -> $(cat "$err")"
+    else
+        echo "FAIL: drape view with an unwritable screenshot -> exit $code, expected 5 and one line:"; cat "$err"; fail=1
+    fi
+else
+    echo "skip: drape view exit codes (no viewer in this build, or no xvfb-run)"
+fi
+
+# Memory is checked before a big build: refused at once with the figure (ulimit -v makes it the same on any machine).
+(
+    ulimit -v 4000000
+    expect_error "--size 4096: the cloth would have 16777216 particles and needs about" run --size 4096
+    exit $fail
+) || fail=1
+
+# --size on an outline cloth does not apply: said on stderr and in the JSON, and the reported figures are the spacing's.
+echo '{"cloth": {"type": "outline", "outline": [[0,0],[0.3,0],[0,0.3]]}}' >"$tmpdir/tri.json"
+"$DRAPE" run --scene "$tmpdir/tri.json" --size 50 --steps 2 --json >"$out" 2>"$err" || { echo "FAIL: outline --size run"; cat "$err"; fail=1; }
+if grep -qF -- "--size 50 is ignored for an outline cloth" "$err" &&
+    python3 -c "import json,sys; j=json.load(open('$out')); assert j['cloth']=='outline' and j['size_ignored']==50 and 'n' not in j and 'cells_per_metre' not in j, j"; then
+    echo "ok: --size on an outline -> $(cat "$err")"
+else
+    echo "FAIL: --size on an outline cloth is not reported as ignored"; cat "$err" "$out"; fail=1
+fi
+
+# The progress line (a terminal only) is erased before the summary, not left above it.
+if command -v script >/dev/null; then
+    DRAPE_PROGRESS_AFTER=0 script -qec "$DRAPE run --size 20 --steps 3000" /dev/null >"$out" 2>&1
+    if python3 - "$out" <<'PY'; then
+import sys
+text = open(sys.argv[1], "rb").read()
+progress = text.rfind(b"drape: substep")
+summary = text.find(b"drape run: scene")
+assert progress >= 0, "no progress line shown on the terminal"
+assert summary > progress, "the summary came before the progress line"
+assert b"\r\x1b[K" in text[progress:summary], "the progress line is not erased before the summary: %r" % text[progress:summary]
+PY
+        echo "ok: the progress line is erased before the summary"
+    else
+        fail=1
+    fi
+else
+    echo "skip: progress line (no 'script' to run on a terminal)"
+fi
 expect_error "[10, 1000]" run --scene tshirt --size 5
 
 # Every built-in scene runs and reports; OBJ frames are written.

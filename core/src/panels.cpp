@@ -795,9 +795,20 @@ void check_outline(const OutlinePanel& panel) {
                                std::to_string((i + 1) % n) + " coincide (consecutive vertices must differ)");
     }
     const double area = std::abs(signed_area(o));
-    if (!(area > 1e-12 * std::max(extent * extent, 1e-300)))
-        throw InvalidInput("outline has zero area (its vertices are collinear)");
+    const bool zero_area = !(area > 1e-12 * std::max(extent * extent, 1e-300));
     const double tol = 1e-14 * extent * extent;
+    if (zero_area) { // all on one line, or a self-crossing outline whose lobes cancel (a bow tie): told apart below
+        std::size_t far = 0;
+        double far_d = 0;
+        for (std::size_t i = 1; i < n; ++i) {
+            const double d = std::hypot(o[i][0] - o[0][0], o[i][1] - o[0][1]);
+            if (d > far_d) far_d = d, far = i;
+        }
+        bool collinear = true;
+        for (std::size_t i = 1; i < n && collinear; ++i)
+            collinear = orient_sign(o[0], o[far], o[i], 1e-12 * std::max(extent * extent, 1e-300)) == 0;
+        if (collinear) throw InvalidInput("outline has zero area (its vertices are collinear)");
+    }
     for (std::size_t i = 0; i < n; ++i) {
         const auto& a = o[i];
         const auto& b = o[(i + 1) % n];
@@ -805,15 +816,37 @@ void check_outline(const OutlinePanel& panel) {
         const auto& c = o[(i + 2) % n];
         if (orient_sign(a, b, c, tol) == 0 &&
             (c[0] - b[0]) * (a[0] - b[0]) + (c[1] - b[1]) * (a[1] - b[1]) > 0)
-            throw InvalidInput("outline edges " + std::to_string(i) + " and " + std::to_string((i + 1) % n) +
-                               " fold back onto each other (the outline must be simple)");
+            throw InvalidInput("outline is self-intersecting: edges " + std::to_string(i) + " and " +
+                               std::to_string((i + 1) % n) + " fold back onto each other (the outline must be a "
+                               "simple polygon)");
         for (std::size_t j = i + 2; j < n; ++j) {
             if (i == 0 && j == n - 1) continue; // adjacent through vertex 0
             if (segments_touch(a, b, o[j], o[(j + 1) % n], tol))
-                throw InvalidInput("outline edges " + std::to_string(i) + " and " + std::to_string(j) +
-                                   " intersect (the outline must be simple)");
+                throw InvalidInput("outline is self-intersecting: edge " + std::to_string(i) + " (vertices " +
+                                   std::to_string(i) + "-" + std::to_string((i + 1) % n) + ") meets edge " +
+                                   std::to_string(j) + " (vertices " + std::to_string(j) + "-" +
+                                   std::to_string((j + 1) % n) + "); the outline must be a simple polygon");
         }
     }
+    if (zero_area) throw InvalidInput("outline has zero area");
+}
+
+double outline_panel_point_estimate(const OutlinePanel& panel, double h) {
+    const auto& poly = panel.outline;
+    const std::size_t nv = poly.size();
+    if (nv == 0) return 0.0;
+    double min_u = poly[0][0], max_u = poly[0][0], min_v = poly[0][1], max_v = poly[0][1];
+    double perimeter = 0;
+    for (std::size_t i = 0; i < nv; ++i) {
+        min_u = std::min(min_u, poly[i][0]);
+        max_u = std::max(max_u, poly[i][0]);
+        min_v = std::min(min_v, poly[i][1]);
+        max_v = std::max(max_v, poly[i][1]);
+        const auto& b = poly[(i + 1) % nv];
+        perimeter += std::hypot(b[0] - poly[i][0], b[1] - poly[i][1]);
+    }
+    const double cols_d = std::floor((max_u - min_u) / h) + 1, rows_d = std::floor((max_v - min_v) / h) + 1;
+    return cols_d * rows_d + perimeter / h + 2.0 * static_cast<double>(nv);
 }
 
 OutlinePanelBuild add_outline_panel(GarmentAssembly& io, const OutlinePanel& panel,
@@ -833,22 +866,22 @@ OutlinePanelBuild add_outline_panel(GarmentAssembly& io, const OutlinePanel& pan
 
     // Bounding box and a size check before anything is allocated.
     double min_u = poly[0][0], max_u = poly[0][0], min_v = poly[0][1], max_v = poly[0][1];
-    double perimeter = 0;
     for (std::size_t i = 0; i < nv; ++i) {
         min_u = std::min(min_u, poly[i][0]);
         max_u = std::max(max_u, poly[i][0]);
         min_v = std::min(min_v, poly[i][1]);
         max_v = std::max(max_v, poly[i][1]);
-        const auto& b = poly[(i + 1) % nv];
-        perimeter += std::hypot(b[0] - poly[i][0], b[1] - poly[i][1]);
     }
     const double cols_d = std::floor((max_u - min_u) / h) + 1, rows_d = std::floor((max_v - min_v) / h) + 1;
-    const double estimate = cols_d * rows_d + perimeter / h + 2.0 * static_cast<double>(nv);
-    if (estimate > static_cast<double>(p.max_points))
-        throw InvalidInput("outline panel would need up to " +
-                           std::to_string(static_cast<long long>(estimate)) + " points at spacing " +
-                           std::to_string(h) + " m (max_points = " + std::to_string(p.max_points) +
-                           "); raise the spacing or max_points");
+    const double estimate = outline_panel_point_estimate(panel, h);
+    if (estimate > static_cast<double>(p.max_points)) {
+        char msg[200];
+        std::snprintf(msg, sizeof msg,
+                      "outline panel would need up to %.0f points at spacing %g m (at most %zu: max_points); raise "
+                      "the spacing",
+                      estimate, h, p.max_points);
+        throw InvalidInput(msg);
+    }
     const std::size_t cols = static_cast<std::size_t>(cols_d), rows = static_cast<std::size_t>(rows_d);
 
     // Points: outline samples first (in outline order), then the fill, row by row.
@@ -921,8 +954,14 @@ OutlinePanelBuild add_outline_panel(GarmentAssembly& io, const OutlinePanel& pan
         if (inside_polygon(poly, cx, cy)) kept.insert(kept.end(), {tris[t], tris[t + 1], tris[t + 2]});
     }
     if (kept.empty())
-        throw InvalidInput("outline panel has no triangle at spacing " + std::to_string(h) +
-                           " m (the outline is too small or too thin for it)");
+    {
+        char msg[200];
+        std::snprintf(msg, sizeof msg,
+                      "outline panel has no triangle at spacing %g m: the outline is too small or too thin for that "
+                      "spacing (use a smaller spacing)",
+                      h);
+        throw InvalidInput(msg);
+    }
 
     // Particles: the points used by kept triangles, in point order; lumped masses (1/3 of each triangle's
     // area).

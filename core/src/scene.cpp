@@ -2,9 +2,19 @@
 // file and the JSON path) and cooking a SceneSpec into a cloth plus simulation parameters.
 #include "drape/scene.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <cstdio>
+#include <cstring>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -30,18 +40,201 @@ std::string format_number(double v) {
     return out.str();
 }
 
+/// JSON paths ("cloth.n", "physics.gravity[1]") of numbers the file writes but a double cannot hold (1e400, a 400-digit
+/// integer) or that JSON does not have (NaN, Infinity), each with its text as written. The document holds 0 there;
+/// the reader reports the value at its field, with the field's allowed range.
+using NonFiniteNumbers = std::map<std::string, std::string>;
+
+/// nlohmann's DOM builder plus the JSON path of the value being parsed, so that a parse error can name its field.
+class PathTrackingParser {
+  public:
+    using number_integer_t = json::number_integer_t;
+    using number_unsigned_t = json::number_unsigned_t;
+    using number_float_t = json::number_float_t;
+    using string_t = json::string_t;
+    using binary_t = json::binary_t;
+
+    explicit PathTrackingParser(json& root) : dom_(root, false) {}
+
+    bool null() { return value(dom_.null()); }
+    bool boolean(bool v) { return value(dom_.boolean(v)); }
+    bool number_integer(number_integer_t v) { return value(dom_.number_integer(v)); }
+    bool number_unsigned(number_unsigned_t v) { return value(dom_.number_unsigned(v)); }
+    bool number_float(number_float_t v, const string_t& s) { return value(dom_.number_float(v, s)); }
+    bool string(string_t& v) { return value(dom_.string(v)); }
+    bool binary(binary_t& v) { return value(dom_.binary(v)); }
+    bool start_object(std::size_t n) {
+        frames_.push_back({false, 0, {}});
+        return dom_.start_object(n);
+    }
+    bool key(string_t& k) {
+        frames_.back().key = k;
+        return dom_.key(k);
+    }
+    bool end_object() {
+        frames_.pop_back();
+        return value(dom_.end_object());
+    }
+    bool start_array(std::size_t n) {
+        frames_.push_back({true, 0, {}});
+        return dom_.start_array(n);
+    }
+    bool end_array() {
+        frames_.pop_back();
+        return value(dom_.end_array());
+    }
+    bool parse_error(std::size_t position, const std::string& token, const nlohmann::detail::exception& e) {
+        error_position = position;
+        error_token = token;
+        error_id = e.id;
+        error_message = e.what();
+        error_path = path();
+        return false;
+    }
+
+    /// The JSON path of the value being parsed ("" at the top level).
+    std::string path() const {
+        std::string out;
+        for (const Frame& f : frames_) {
+            if (f.array) {
+                out += '[';
+                out += std::to_string(f.index);
+                out += ']';
+            } else if (!f.key.empty()) {
+                if (!out.empty()) out += '.';
+                out += f.key;
+            }
+        }
+        return out;
+    }
+
+    std::size_t error_position = 0;
+    int error_id = 0;
+    std::string error_token, error_message, error_path;
+
+  private:
+    struct Frame {
+        bool array;
+        std::size_t index;
+        std::string key;
+    };
+    /// After a value (scalar or closed container): the next array element has the next index.
+    bool value(bool ok) {
+        if (!frames_.empty() && frames_.back().array) ++frames_.back().index;
+        return ok;
+    }
+    nlohmann::detail::json_sax_dom_parser<json> dom_;
+    std::vector<Frame> frames_;
+};
+
+bool is_word_char(char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '+' || c == '-' || c == '.';
+}
+
+/// The byte range [begin, end) of a non-finite number at a failed parse's position, or {0, 0}: an overflowing number
+/// (error 406, the position is just past it) or a NaN / Infinity / inf literal (a syntax error inside it).
+std::pair<std::size_t, std::size_t> non_finite_token(const std::string& text, const PathTrackingParser& p) {
+    const std::size_t pos = std::min(p.error_position, text.size());
+    if (pos == 0) return {0, 0};
+    if (p.error_id != 406 && p.error_message.find("while parsing value") == std::string::npos) return {0, 0};
+    std::size_t begin = pos, end = pos;
+    while (begin > 0 && is_word_char(text[begin - 1])) --begin;
+    while (end < text.size() && is_word_char(text[end])) ++end;
+    if (p.error_id == 406) { // the lexer stopped just past the number
+        const std::size_t n = p.error_token.size();
+        if (n == 0 || n > pos || text.compare(pos - n, n, p.error_token) != 0) return {0, 0};
+        return {pos - n, pos};
+    }
+    if (begin == end) return {0, 0};
+    std::string word = text.substr(begin, end - begin);
+    if (word[0] == '+' || word[0] == '-') word.erase(0, 1);
+    for (char& c : word) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (word == "nan" || word == "inf" || word == "infinity") return {begin, end};
+    return {0, 0};
+}
+
+std::string shorten(const std::string& s, std::size_t max_chars = 40) {
+    return s.size() <= max_chars ? s : s.substr(0, max_chars - 3) + "...";
+}
+
+/// Text from the file (a key, a string value, a parser message) made fit for a one-line message: control characters
+/// escaped (\u000a), and at most about max_chars long, cut in the middle ("cloth[0][0]...[0][0]") on character
+/// boundaries.
+std::string printable(const std::string& s, std::size_t max_chars) {
+    std::string out;
+    for (const char ch : s) {
+        const auto c = static_cast<unsigned char>(ch);
+        if (c < 0x20 || c == 0x7f) {
+            char esc[8];
+            std::snprintf(esc, sizeof esc, "\\u%04x", unsigned(c));
+            out += esc;
+        } else {
+            out += ch;
+        }
+    }
+    if (out.size() <= max_chars) return out;
+    auto boundary = [&](std::size_t k) { // back to the first byte of a UTF-8 character
+        while (k > 0 && (static_cast<unsigned char>(out[k]) & 0xC0) == 0x80) --k;
+        return k;
+    };
+    const std::size_t head = boundary(max_chars / 2), tail = boundary(out.size() - max_chars / 2);
+    return out.substr(0, head) + "..." + out.substr(tail);
+}
+
+/// Parses JSON text, turning non-finite numbers into null and recording them (at most 32: past that, the first one
+/// is reported without its field's range). Any other error is "malformed JSON" naming where it is.
+json parse_json(std::string text, const std::string& source, NonFiniteNumbers& non_finite) {
+    for (int attempt = 0;; ++attempt) {
+        json doc;
+        PathTrackingParser parser(doc);
+        if (json::sax_parse(text, &parser)) return doc;
+        const auto [begin, end] = non_finite_token(text, parser);
+        if (begin == end) {
+            std::string where = parser.error_path.empty() ? "" : " (near " + printable(parser.error_path, 160) + ")";
+            throw InvalidInput(source + ": malformed JSON" + where + ": " + printable(parser.error_message, 400));
+        }
+        const std::string token = text.substr(begin, end - begin);
+        if (attempt == 32)
+            throw InvalidInput(source + ": " + printable(parser.error_path, 160) + " = " + shorten(token) +
+                               " is not a finite number (JSON numbers must be finite doubles)");
+        non_finite.emplace(parser.error_path, token);
+        // A 0 padded to the token's length: the reader reports the recorded token at this path whatever stands there,
+        // and the line and column of any later syntax error stay those of the file.
+        text[begin] = '0';
+        std::fill(text.begin() + std::ptrdiff_t(begin) + 1, text.begin() + std::ptrdiff_t(end), ' ');
+    }
+}
+
+/// A field the reader refused (its message already names the file and the field).
+class FieldError : public InvalidInput {
+  public:
+    using InvalidInput::InvalidInput;
+};
+
 /// Reads one JSON object: typed, range-checked fields; remembers which keys were read so that finish() can refuse
 /// unknown ones.
 class ObjectReader {
   public:
-    ObjectReader(const json& j, std::string path, const std::string& source) : j_(j), path_(std::move(path)), source_(source) {
-        if (!j_.is_object()) fail(path_.empty() ? "the document" : path_, "must be a JSON object");
+    ObjectReader(const json& j, std::string path, const std::string& source, const NonFiniteNumbers* non_finite = nullptr)
+        : j_(j), path_(std::move(path)), source_(source), non_finite_(non_finite) {
+        if (!j_.is_object()) {
+            check_finite(path_, "");
+            fail(path_.empty() ? "the document" : path_, "must be a JSON object");
+        }
     }
 
     [[noreturn]] void fail(const std::string& where, const std::string& what) const {
-        throw InvalidInput(source_ + ": " + where + " " + what);
+        throw FieldError(source_ + ": " + printable(where, 160) + " " + what);
     }
     std::string at(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+    /// Refuses a number the file wrote that is not finite (1e400, NaN): `range` is the field's allowed range.
+    void check_finite(const std::string& where, const std::string& range) const {
+        if (!non_finite_) return;
+        const auto it = non_finite_->find(where);
+        if (it != non_finite_->end())
+            fail(where.empty() ? "the document" : where, "= " + shorten(it->second) + " is not a finite number" +
+                            (range.empty() ? std::string() : "; allowed range " + range));
+    }
     bool has(const std::string& key) const { return j_.contains(key); }
     bool has_array(const std::string& key) const { return j_.contains(key) && j_[key].is_array(); }
 
@@ -49,6 +242,7 @@ class ObjectReader {
         seen_.insert(key);
         if (!j_.contains(key)) return fallback;
         const json& v = j_[key];
+        check_finite(at(key), "[" + format_number(lo) + ", " + format_number(hi) + "]" + unit);
         if (!v.is_number()) fail(at(key), "must be a number in [" + format_number(lo) + ", " + format_number(hi) + "]" + unit);
         const double d = v.get<double>();
         if (!(d >= lo && d <= hi))
@@ -60,6 +254,7 @@ class ObjectReader {
         seen_.insert(key);
         if (!j_.contains(key)) return fallback;
         const json& v = j_[key];
+        check_finite(at(key), "[" + std::to_string(lo) + ", " + std::to_string(hi) + "] (a whole number)");
         if (!v.is_number_integer() && !(v.is_number() && std::floor(v.get<double>()) == v.get<double>()))
             fail(at(key), "must be a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
         const double d = v.get<double>();
@@ -71,7 +266,10 @@ class ObjectReader {
     bool boolean(const std::string& key, bool fallback) {
         seen_.insert(key);
         if (!j_.contains(key)) return fallback;
-        if (!j_[key].is_boolean()) fail(at(key), "must be true or false");
+        if (!j_[key].is_boolean()) {
+            check_finite(at(key), "");
+            fail(at(key), "must be true or false");
+        }
         return j_[key].get<bool>();
     }
     std::string text(const std::string& key, const std::vector<std::string>& allowed, const std::string& fallback) {
@@ -79,10 +277,13 @@ class ObjectReader {
         if (!j_.contains(key)) return fallback;
         std::string list;
         for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + ("\"" + a + "\"");
-        if (!j_[key].is_string()) fail(at(key), allowed.empty() ? "must be a string" : "must be one of " + list);
+        if (!j_[key].is_string()) {
+            check_finite(at(key), "");
+            fail(at(key), allowed.empty() ? "must be a string" : "must be one of " + list);
+        }
         const std::string s = j_[key].get<std::string>();
         if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), s) == allowed.end())
-            fail(at(key), "= \"" + s + "\" is not one of " + list);
+            fail(at(key), "= \"" + printable(s, 60) + "\" is not one of " + list);
         if (s.size() > 4096) fail(at(key), "is longer than 4096 characters");
         return s;
     }
@@ -91,11 +292,14 @@ class ObjectReader {
         seen_.insert(key);
         if (!j_.contains(key)) return fallback;
         const json& v = j_[key];
+        check_finite(at(key), "");
         if (!v.is_array() || v.size() != 3)
             fail(at(key), std::string("must be an array of 3 numbers in [-") + format_number(limit) + ", " +
                               format_number(limit) + "]" + unit);
         std::array<double, 3> out{};
         for (int k = 0; k < 3; ++k) {
+            check_finite(at(key) + "[" + std::to_string(k) + "]",
+                         "[-" + format_number(limit) + ", " + format_number(limit) + "]" + unit);
             if (!v[k].is_number()) fail(at(key) + "[" + std::to_string(k) + "]", "must be a number");
             const double d = v[k].get<double>();
             if (!(std::fabs(d) <= limit))
@@ -114,12 +318,15 @@ class ObjectReader {
     ObjectReader object(const std::string& key) {
         seen_.insert(key);
         static const json empty = json::object();
-        return ObjectReader(j_.contains(key) ? j_[key] : empty, at(key), source_);
+        return ObjectReader(j_.contains(key) ? j_[key] : empty, at(key), source_, non_finite_);
     }
     const json* array(const std::string& key, std::size_t max_items) {
         seen_.insert(key);
         if (!j_.contains(key)) return nullptr;
-        if (!j_[key].is_array()) fail(at(key), "must be an array");
+        if (!j_[key].is_array()) {
+            check_finite(at(key), "");
+            fail(at(key), "must be an array");
+        }
         if (j_[key].size() > max_items) fail(at(key), "has " + std::to_string(j_[key].size()) + " entries (at most " +
                                                           std::to_string(max_items) + ")");
         return &j_[key];
@@ -129,11 +336,13 @@ class ObjectReader {
             if (!seen_.count(it.key())) fail(at(it.key()), "is not a known field");
     }
     const std::string& source() const { return source_; }
+    const NonFiniteNumbers* non_finite() const { return non_finite_; }
 
   private:
     const json& j_;
     std::string path_;
     const std::string& source_;
+    const NonFiniteNumbers* non_finite_;
     std::set<std::string> seen_;
 };
 
@@ -168,6 +377,8 @@ Collider read_collider(ObjectReader& r) {
             c = make_ellipsoid(r.vec3("centre", 1000.0, " m", {0, 0, 0}), r.vec3("semi_axes", 1000.0, " m", {0.3f, 0.2f, 0.2f}),
                                surface);
         }
+    } catch (const FieldError&) {
+        throw;
     } catch (const InvalidInput& e) {
         r.fail(r.at("type") + " \"" + type + "\":", e.what());
     }
@@ -269,16 +480,15 @@ std::vector<std::string> builtin_scene_names() {
     return out;
 }
 
-SceneSpec parse_scene(const std::string& text, const std::string& source, const std::string& base_dir) {
+// A function-try-block: whatever nlohmann throws (a type or range error the reader did not foresee) becomes
+// InvalidInput naming the file; nothing else escapes but InvalidInput and std::bad_alloc.
+SceneSpec parse_scene(const std::string& text, const std::string& source, const std::string& base_dir) try {
     if (text.size() > (std::size_t{16} << 20)) throw InvalidInput(source + ": file is larger than 16 MiB");
-    json doc;
-    try {
-        doc = json::parse(text);
-    } catch (const json::parse_error& e) {
-        throw InvalidInput(source + ": malformed JSON: " + e.what());
-    }
-    ObjectReader root(doc, "", source);
+    NonFiniteNumbers non_finite;
+    const json doc = parse_json(text, source, non_finite);
+    ObjectReader root(doc, "", source, &non_finite);
     SceneSpec s;
+    s.source = source;
     s.name = root.text("scene", {}, "unnamed");
     s.description = root.text("description", {}, "");
 
@@ -298,6 +508,7 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
         for (std::size_t k = 0; k < pts->size(); ++k) {
             const json& v = (*pts)[k];
             const std::string where = cloth.at("outline") + "[" + std::to_string(k) + "]";
+            for (const std::string& w : {where, where + "[0]", where + "[1]"}) cloth.check_finite(w, "[-100, 100] m");
             if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number())
                 cloth.fail(where, "must be [u, v], two numbers in metres");
             const double u = v[0].get<double>(), w = v[1].get<double>();
@@ -319,6 +530,8 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
             for (std::size_t k = 0; k < sew->size(); ++k) {
                 const json& v = (*sew)[k];
                 const std::string where = copy.at("sew") + "[" + std::to_string(k) + "]";
+                for (const std::string& w : {where, where + "[0]", where + "[1]"})
+                    copy.check_finite(w, "[0, " + std::to_string(pts->size() - 1) + "] (vertex indices)");
                 if (!v.is_array() || v.size() != 2 || !v[0].is_number_unsigned() || !v[1].is_number_unsigned() ||
                     v[0].get<std::uint64_t>() >= pts->size() || v[1].get<std::uint64_t>() >= pts->size())
                     cloth.fail(where, "must be [from vertex, to vertex], indices in [0, " +
@@ -332,6 +545,12 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
         } catch (const InvalidInput& e) {
             cloth.fail(cloth.at("outline") + ":", e.what());
         }
+        const double points = outline_panel_point_estimate(o.outline, o.spacing);
+        const std::size_t max_points = OutlinePanelParams{}.max_points;
+        if (points > double(max_points))
+            cloth.fail(cloth.at("spacing"), "= " + format_number(o.spacing) + " m gives this outline up to " +
+                                                (points < 1e15 ? std::to_string(static_cast<long long>(points)) : format_number(points)) + " points per panel; at most " +
+                                                std::to_string(max_points) + " are allowed (raise the spacing)");
     } else if (s.cloth == ClothType::grid) {
         HangParams& g = s.grid;
         g.n = cloth.integer("n", hang_min_n, hang_max_n, 100);
@@ -397,7 +616,7 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
     // colliders
     if (const json* list = root.array("colliders", 64)) {
         for (std::size_t k = 0; k < list->size(); ++k) {
-            ObjectReader r((*list)[k], "colliders[" + std::to_string(k) + "]", source);
+            ObjectReader r((*list)[k], "colliders[" + std::to_string(k) + "]", source, &non_finite);
             p.colliders.push_back(read_collider(r));
         }
     }
@@ -408,12 +627,18 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
     }
 
     root.finish();
+    // Every field was read or refused above, so a non-finite number has been reported; this is a safety net.
+    if (!non_finite.empty())
+        throw InvalidInput(source + ": " + printable(non_finite.begin()->first, 160) + " = " + shorten(non_finite.begin()->second) +
+                           " is not a finite number");
 
     const std::size_t particles = scene_particle_count(s);
     if (particles > (std::size_t{1} << 24))
         throw InvalidInput(source + ": the cloth would have " + std::to_string(particles) +
                            " particles; at most 16,777,216 are allowed");
     return s;
+} catch (const json::exception& e) {
+    throw InvalidInput(source + ": " + e.what());
 }
 
 SceneSpec load_scene(const std::string& name_or_path) {
@@ -426,15 +651,60 @@ SceneSpec load_scene(const std::string& name_or_path) {
         for (const std::string& n : builtin_scene_names()) names += (names.empty() ? "" : ", ") + n;
         throw InvalidInput("unknown scene '" + name_or_path + "' (built-in scenes: " + names + "; or a path to a .json file)");
     }
-    std::ifstream in(name_or_path, std::ios::binary);
-    if (!in) throw InvalidInput(name_or_path + ": cannot open the scene file");
-    in.seekg(0, std::ios::end);
-    const auto size = in.tellg();
-    if (size < 0) throw InvalidInput(name_or_path + ": cannot read the scene file");
-    if (size > (std::streamoff{16} << 20)) throw InvalidInput(name_or_path + ": file is larger than 16 MiB");
-    in.seekg(0);
-    std::string text(static_cast<std::size_t>(size), '\0');
-    in.read(text.data(), size);
+    // What the path is, before opening it: opening a FIFO would block until a writer comes, a directory "opens".
+    const std::string& path = name_or_path;
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) {
+        const int err = errno;
+        if (err == ENOENT) throw InvalidInput(path + ": the scene file does not exist");
+        if (err == ENOTDIR) throw InvalidInput(path + ": the scene file does not exist (a part of the path is not a directory)");
+        if (err == EACCES) throw InvalidInput(path + ": the scene file cannot be read (permission denied)");
+        throw InvalidInput(path + ": the scene file cannot be read (" + std::strerror(err) + ")");
+    }
+    auto kind = [](mode_t mode) -> const char* {
+        if (S_ISFIFO(mode)) return "a FIFO";
+        if (S_ISSOCK(mode)) return "a socket";
+        if (S_ISCHR(mode)) return "a character device";
+        if (S_ISBLK(mode)) return "a block device";
+        return "not a plain file";
+    };
+    if (S_ISDIR(st.st_mode)) throw InvalidInput(path + ": is a directory, not a scene file");
+    if (!S_ISREG(st.st_mode)) throw InvalidInput(path + ": is not a regular file (" + kind(st.st_mode) + ")");
+    const auto too_big = [&](std::uintmax_t bytes) {
+        char mib[32];
+        std::snprintf(mib, sizeof mib, "%.1f", double(bytes) / (1024.0 * 1024.0));
+        return InvalidInput(path + ": the file is " + mib + " MiB; scene files are limited to 16 MiB");
+    };
+    if (std::uintmax_t(st.st_size) > (std::uintmax_t{16} << 20)) throw too_big(std::uintmax_t(st.st_size));
+
+    // Opened without blocking and checked again on the descriptor: the path may have been replaced since the stat.
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        const int err = errno;
+        throw InvalidInput(path + ": the scene file cannot be read (" +
+                           (err == EACCES ? std::string("permission denied") : std::string(std::strerror(err))) + ")");
+    }
+    std::string text;
+    std::string failure;
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        failure = "is not a regular file";
+    } else {
+        char buf[65536];
+        for (;;) {
+            const ssize_t got = ::read(fd, buf, sizeof buf);
+            if (got < 0 && errno == EINTR) continue;
+            if (got < 0) {
+                failure = std::string("the scene file cannot be read (") + std::strerror(errno) + ")";
+                break;
+            }
+            if (got == 0) break;
+            text.append(buf, static_cast<std::size_t>(got));
+            if (text.size() > (std::size_t{16} << 20)) break;
+        }
+    }
+    ::close(fd);
+    if (!failure.empty()) throw InvalidInput(path + ": " + failure);
+    if (text.size() > (std::size_t{16} << 20)) throw too_big(text.size());
     return parse_scene(text, name_or_path, std::filesystem::path(name_or_path).parent_path().string());
 }
 
@@ -538,11 +808,21 @@ BuiltScene build_scene(const SceneSpec& s) {
         op.spacing = o.spacing;
         op.areal_density = o.density;
         GarmentAssembly a;
-        const OutlinePanelBuild front = add_outline_panel(a, o.outline, op, frame);
+        // Panel errors the file could not be checked for before triangulating (an outline too thin for its
+        // spacing) name the file and the fields.
+        const auto panel = [&](const PanelFrame& f) {
+            try {
+                return add_outline_panel(a, o.outline, op, f);
+            } catch (const InvalidInput& e) {
+                throw InvalidInput((s.source.empty() ? std::string("scene") : s.source) + ": cloth.outline at cloth.spacing = " +
+                                   format_number(o.spacing) + " m: " + e.what());
+            }
+        };
+        const OutlinePanelBuild front = panel(frame);
         if (o.copy) {
             PanelFrame back = frame;
             for (int k = 0; k < 3; ++k) back.origin[k] += 2.0f * half_gap * normal[k];
-            const OutlinePanelBuild rear = add_outline_panel(a, o.outline, op, back);
+            const OutlinePanelBuild rear = panel(back);
             for (const auto& [from, to] : o.sew) {
                 const OutlineStretch stretch{from, to, false};
                 sew_by_arc_length(a, outline_stretch_particles(front, stretch), outline_stretch_particles(rear, stretch),

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <sstream>
 #include <vector>
 
@@ -45,17 +47,30 @@ StabilityBound stability_bound(const Cloth& cloth, float air_drag) {
 
 double default_dt(const Cloth& cloth, float air_drag) { return 0.9 * stability_bound(cloth, air_drag).dt_max; }
 
-void check_stability(const Cloth& cloth, const SimulationParams& params) {
+void check_stability(const Cloth& cloth, const SimulationParams& params, const std::string& what) {
     const StabilityBound b = stability_bound(cloth, params.air_drag);
-    if (double(params.dt) <= b.dt_max) return;
+    // Compared in float, the precision dt is stored in: the bound as printed (9 significant digits, see
+    // format_dt) and pasted back as dt is accepted.
+    if (params.dt <= static_cast<float>(b.dt_max)) return;
     std::ostringstream msg;
     msg.precision(3);
     const double substeps = std::ceil(double(params.dt) / (0.9 * b.dt_max));
-    msg << "dt = " << params.dt << " s exceeds the explicit stability bound " << b.dt_max
+    msg << what << " = " << format_dt(params.dt) << " s is above the explicit stability bound " << format_dt(b.dt_max)
         << " s for this cloth (stiffest spring " << b.max_stiffness << " N/m, lightest particle " << b.min_mass
-        << " kg); use dt <= " << b.dt_max << " s, e.g. split this step into " << substeps << " substeps of "
-        << double(params.dt) / substeps << " s";
+        << " kg); use dt <= " << format_dt(b.dt_max) << " s, e.g. split this step into " << substeps
+        << " substeps of " << double(params.dt) / substeps << " s";
     throw InvalidInput(msg.str());
+}
+
+std::string format_dt(double dt) {
+    // The shortest of 6 to 9 significant digits that reads back as the same float (9 always does).
+    const float f = static_cast<float>(dt);
+    char buf[32];
+    for (int digits = 6; digits <= 9; ++digits) {
+        std::snprintf(buf, sizeof buf, "%.*g", digits, double(f));
+        if (std::strtof(buf, nullptr) == f) break;
+    }
+    return buf;
 }
 
 } // namespace drape

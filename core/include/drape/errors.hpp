@@ -28,6 +28,13 @@ class BlowUpError : public SimulationError {
     using SimulationError::SimulationError;
 };
 
+/// An output file (a screenshot, an OBJ frame, a recording) could not be written; the message names the path and
+/// why. The CLI maps it to exit code 5.
+class WriteError : public std::runtime_error {
+  public:
+    using std::runtime_error::runtime_error;
+};
+
 /// Exit codes of the `drape` executable (docs/user_guide.md states them).
 namespace exit_code {
 inline constexpr int ok = 0;

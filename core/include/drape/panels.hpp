@@ -202,6 +202,10 @@ struct OutlinePanelBuild {
 /// InvalidInput naming the vertex or edges at fault.
 void check_outline(const OutlinePanel& panel);
 
+/// Upper bound on the points (fill grid cells of the bounding box, outline samples, vertices) an outline panel at
+/// spacing h allocates before it is triangulated; add_outline_panel refuses a panel above params.max_points.
+double outline_panel_point_estimate(const OutlinePanel& panel, double spacing);
+
 /// Appends a panel cut from an outline: fill points at spacing h strictly inside the polygon (and at least
 /// outline_clearance * h from it), the outline vertices, and points along each outline edge at spacing <= h;
 /// Bowyer- Watson Delaunay over them; triangles whose centroid is outside the polygon are dropped, and then

@@ -62,6 +62,7 @@ struct SceneState {
 /// Everything a scene file holds (cold tier). Defaults are those of "hang".
 struct SceneSpec {
     std::string name = "hang";
+    std::string source;   ///< where it was read from, for messages: a file path or "built-in scene 'hang'"
     std::string description;
     ClothType cloth = ClothType::grid;
     HangParams grid;      ///< cloth.type = "grid" (n, size, mass, plane, centre, pins, material)

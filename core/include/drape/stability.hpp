@@ -8,6 +8,8 @@
 // dt_max solves w^2 dt^2 + 2 g dt = 4 with those bounds: conservative, and close to SPEC's ~sqrt(m/k).
 #pragma once
 
+#include <string>
+
 #include "drape/cloth.hpp"
 
 namespace drape {
@@ -27,7 +29,12 @@ StabilityBound stability_bound(const Cloth& cloth, float air_drag);
 /// The default substep for a cloth: 90% of the bound.
 double default_dt(const Cloth& cloth, float air_drag);
 
-/// Throws InvalidInput when dt exceeds the bound; the message states the bound and the substeps needed.
-void check_stability(const Cloth& cloth, const SimulationParams& params);
+/// Throws InvalidInput when dt exceeds the bound (compared in float, dt's precision); the message names `what`
+/// (e.g. "dt", "--dt", "scene.json: physics.dt") and states the bound and the substeps needed.
+void check_stability(const Cloth& cloth, const SimulationParams& params, const std::string& what = "dt");
+
+/// A time step as float precision holds it: the fewest significant digits (6 to 9) that read back as the same
+/// float, so that a printed bound pasted back as dt is that float.
+std::string format_dt(double dt);
 
 } // namespace drape
