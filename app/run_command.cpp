@@ -103,7 +103,7 @@ int run_command(const RunOptions& o) {
 
     BuiltScene scene = build_scene(spec);
     SimulationParams sp = scene.params;
-    const StabilityBound bound = stability_bound(scene.cloth, sp.air_drag);
+    const StabilityBound bound = stability_bound(scene.cloth, sp);
     const bool dt_default = !spec.dt.has_value();
 
     std::uint64_t steps = 1000;

@@ -428,7 +428,7 @@ BuiltScene build_scene(const SceneSpec& s) {
         const std::vector<Collider> body = default_body();
         out.params.colliders.insert(out.params.colliders.end(), body.begin(), body.end());
     }
-    out.params.dt = s.dt ? *s.dt : static_cast<float>(default_dt(out.cloth, out.params.air_drag));
+    out.params.dt = s.dt ? *s.dt : static_cast<float>(default_dt(out.cloth, out.params));
     return out;
 }
 

@@ -196,9 +196,10 @@ class Simulation {
     std::vector<std::uint8_t> limit_serial_; ///< per group: 1 = overflow group, run serially
     std::vector<std::uint32_t> limit_a_, limit_b_;
     std::vector<float> limit_rest_;
-    std::vector<std::uint8_t> limit_mode_; ///< per spring: 0 mass-weighted, 1 end a is inner (fixed), 2 end b is inner
     void cook_strain_limit();
-    template <bool Parallel> void strain_limit_stage(StateBuffer& out);
+    /// Runs strain limiting on `out` when it is due this substep (returns false when not); with `with_collide`, the
+    /// collide stage runs after every sweep (limit and collide interleaved, collide last).
+    template <bool Parallel> bool strain_limit_stage(StateBuffer& out, bool with_collide);
     template <bool Parallel> void collide_stage(StateBuffer& out);
     template <bool Parallel> void seam_forces_stage();
     template <bool Parallel> void aero_forces_stage();
