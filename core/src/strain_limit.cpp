@@ -26,6 +26,7 @@
 // With colliders, Simulation::step interleaves: sweep, collide, sweep, collide, ... (collide last), so a particle a
 // collider pushed out is limited again and no particle ends a substep inside a collider.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <span>
@@ -54,17 +55,22 @@ struct LimitArgs {
     const std::uint32_t* __restrict b;
     const float* __restrict rest;
     float stretch;     ///< 1 + ratio
+    float tolerated;   ///< 1 + 1.05 ratio: a spring longer than this before its correction keeps the sweeps going
     float vel_scale;   ///< Euler: 1 / (K dt), the velocity change per unit displacement; 0 for Verlet
     float prev_scale;  ///< Verlet: 1 - 1/K, the x_prev shift per unit displacement; 0 for Euler
 };
 
-void limit_range(const LimitArgs& c, std::size_t begin, std::size_t end) noexcept {
+/// Returns whether a spring of [begin, end) was longer than the tolerated stretch before its correction.
+bool limit_range(const LimitArgs& c, std::size_t begin, std::size_t end) noexcept {
+    bool over = false;
     for (std::size_t k = begin; k < end; ++k) {
         const std::uint32_t ia = c.a[k], ib = c.b[k];
         const float dx = c.x[ib] - c.x[ia], dy = c.y[ib] - c.y[ia], dz = c.z[ib] - c.z[ia];
         const float l2 = dx * dx + dy * dy + dz * dz;
         const float l_max = c.stretch * c.rest[k];
         if (!(l2 > l_max * l_max)) continue;
+        const float l_tol = c.tolerated * c.rest[k];
+        over = over || l2 > l_tol * l_tol;
         const float wa = c.inv_mass[ia], wb = c.inv_mass[ib];
         const float wsum = wa + wb;
         if (wsum == 0.0f) continue;
@@ -88,6 +94,7 @@ void limit_range(const LimitArgs& c, std::size_t begin, std::size_t end) noexcep
             c.w[ib] -= vb * dz;
         }
     }
+    return over;
 }
 
 } // namespace
@@ -169,24 +176,29 @@ template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, b
     if (sl.ratio <= 0.0f || limit_a_.empty() || (steps_done_ + 1) % sl.every != 0) return false;
     LimitArgs c{out.x.data(), out.y.data(), out.z.data(), out.u.data(), out.v.data(), out.w.data(),
                 cloth_.inv_mass.data(), limit_a_.data(), limit_b_.data(), limit_rest_.data(),
-                1.0f + sl.ratio, 0.0f, 0.0f};
+                1.0f + sl.ratio, 1.0f + 1.05f * sl.ratio, 0.0f, 0.0f};
     if (params_.integrator == Integrator::symplectic_euler)
         c.vel_scale = 1.0f / (float(sl.every) * params_.dt);
     else
         c.prev_scale = 1.0f - 1.0f / float(sl.every);
-    for (std::uint32_t pass = 0; pass < sl.passes; ++pass) {
+    // At least `passes` sweeps; more (up to strain_limit_max_passes) while a sweep still found a spring over
+    // 1.05 x the limit, so a limit that can hold does (the JSON of `drape run` reports what was honoured).
+    for (std::uint32_t pass = 0; pass < strain_limit_max_passes; ++pass) {
+        std::atomic<bool> over{false}; // an OR: the same whatever the order of the chunks
         for (std::size_t g = 0; g < limit_groups_.group_count(); ++g) {
             const std::size_t begin = limit_groups_.group_offsets[g], end = limit_groups_.group_offsets[g + 1];
             const std::size_t chunks = (end - begin + limit_chunk - 1) / limit_chunk;
             if (Parallel && !limit_serial_[g] && chunks > 1) {
                 tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t ch) {
-                    limit_range(c, begin + ch * limit_chunk, std::min(end, begin + (ch + 1) * limit_chunk));
+                    if (limit_range(c, begin + ch * limit_chunk, std::min(end, begin + (ch + 1) * limit_chunk)))
+                        over.store(true, std::memory_order_relaxed);
                 });
-            } else {
-                limit_range(c, begin, end); // small group, serial twin, or the overflow group
+            } else if (limit_range(c, begin, end)) { // small group, serial twin, or the overflow group
+                over.store(true, std::memory_order_relaxed);
             }
         }
         if (with_collide) collide_stage<Parallel>(out);
+        if (pass + 1 >= sl.passes && !over.load(std::memory_order_relaxed)) break;
     }
     return true;
 }

@@ -147,7 +147,20 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
     const Integrator integ = params_.integrator;
     const bool wind = params_.wind.enabled;
     const bool seams = !cloth_.seams.empty(), aero = params_.aero.enabled, extra = extra_forces();
+    if (grabbed_ != SIZE_MAX && grab_target_ != grab_applied_) {
+        // The user moved the grab: its speed enters the monitor's speed bound, and the work it did its energy
+        // balance (restarted below, after the grabbed particle has moved).
+        const float dx = grab_target_[0] - grab_applied_[0], dy = grab_target_[1] - grab_applied_[1],
+                    dz = grab_target_[2] - grab_applied_[2];
+        if (count > 0) monitor_.note_user_speed(std::sqrt(dx * dx + dy * dy + dz * dz) / (float(count) * params_.dt));
+        grab_applied_ = grab_target_;
+        rebaseline_ = true;
+    }
     apply_user_constraints();
+    if (rebaseline_) {
+        monitor_.rebaseline<Parallel>(cloth_, params_, cur(), steps_done_);
+        rebaseline_ = false;
+    }
     for (std::size_t n = 0; n < count; ++n) {
         const kernels::StepContext c = make_context(steps_done_);
         if (aero) aero_forces_stage<Parallel>();
@@ -178,7 +191,16 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
         if (!strain_limit_stage<Parallel>(out, collide) && collide) collide_stage<Parallel>(out);
         current_ = 1 - current_;
         ++steps_done_;
+        if (steps_done_ % HealthMonitor::check_every == 0) check_health<Parallel>();
     }
+}
+
+/// The health monitor's check (health_monitor.hpp): on an explosion, back to the last check that passed and throw.
+template <bool Parallel> void Simulation::check_health() {
+    std::string problem = monitor_.check<Parallel>(cloth_, params_, cur(), steps_done_);
+    if (problem.empty()) return;
+    steps_done_ = monitor_.restore(cur(), cloth_.particle_count);
+    throw BlowUpError(problem);
 }
 
 void Simulation::step(std::size_t count) { step_impl<true>(count); }
