@@ -21,10 +21,15 @@ double rest_length(const Cloth& cloth, std::uint32_t a, std::uint32_t b) {
     return it != cloth.edges.end() && it->a == a && it->b == b ? double(it->rest) : 0.0;
 }
 
-/// Per particle, the linearised aerodynamic drag rate rho C_d A_i |v_rel|max / m_i (stability.hpp), 1/s.
-std::vector<double> aero_damping(const Cloth& cloth, const AeroWind& aero) {
+struct AeroTerms {
+    std::vector<double> gamma;  ///< per particle, rho C_d A_i |v_rel|max / m_i, 1/s
+    std::vector<double> omega2; ///< per particle, 3/4 rho C_d |v_rel|max^2 (sum of its triangles' longest edges) / m_i
+};
+
+/// The linearised aerodynamic terms per particle (stability.hpp).
+AeroTerms aero_terms(const Cloth& cloth, const AeroWind& aero) {
     const std::size_t n = cloth.particle_count;
-    std::vector<double> area(n, 0.0);
+    std::vector<double> area(n, 0.0), edges(n, 0.0);
     for (std::size_t t = 0; t + 2 < cloth.triangles.size(); t += 3) {
         const std::uint32_t v[3] = {cloth.triangles[t], cloth.triangles[t + 1], cloth.triangles[t + 2]};
         const double l0 = rest_length(cloth, v[0], v[1]), l1 = rest_length(cloth, v[1], v[2]),
@@ -41,15 +46,22 @@ std::vector<double> aero_damping(const Cloth& cloth, const AeroWind& aero) {
             std::sort(std::begin(l), std::end(l));
             a = 0.5 * l[1] * l[2];
         }
+        const double longest = std::max({l0, l1, l2});
         for (std::uint32_t i : v)
-            if (i < n) area[i] += a / 3.0;
+            if (i < n) {
+                area[i] += a / 3.0;
+                edges[i] += longest;
+            }
     }
     const double wind = std::sqrt(double(aero.velocity[0]) * aero.velocity[0] +
                                   double(aero.velocity[1]) * aero.velocity[1] +
                                   double(aero.velocity[2]) * aero.velocity[2]);
-    const double rate = double(aero.density) * aero.drag_coefficient * (wind + aero_speed_margin);
-    std::vector<double> out(n, 0.0);
-    for (std::size_t i = 0; i < n; ++i) out[i] = rate * area[i] * cloth.inv_mass[i];
+    const double rho_cd = double(aero.density) * aero.drag_coefficient, speed = wind + aero_speed_margin;
+    AeroTerms out{std::vector<double>(n, 0.0), std::vector<double>(n, 0.0)};
+    for (std::size_t i = 0; i < n; ++i) {
+        out.gamma[i] = rho_cd * speed * area[i] * cloth.inv_mass[i];
+        out.omega2[i] = 0.75 * rho_cd * speed * speed * edges[i] * cloth.inv_mass[i];
+    }
     return out;
 }
 
@@ -64,7 +76,8 @@ StabilityBound stability_bound(const Cloth& cloth, const SimulationParams& param
 StabilityBound stability_bound(const Cloth& cloth, float air_drag, const AeroWind* aero) {
     const std::size_t n = cloth.particle_count;
     std::vector<double> sum_k(n, 0.0), sum_kd(n, 0.0);
-    const std::vector<double> aero_gamma = aero ? aero_damping(cloth, *aero) : std::vector<double>(n, 0.0);
+    const AeroTerms aero_t = aero ? aero_terms(cloth, *aero)
+                                  : AeroTerms{std::vector<double>(n, 0.0), std::vector<double>(n, 0.0)};
     StabilityBound b;
     for (const Edge& e : cloth.edges) {
         const SpringMaterial& m = cloth.material[static_cast<std::size_t>(e.kind)];
@@ -78,9 +91,9 @@ StabilityBound stability_bound(const Cloth& cloth, float air_drag, const AeroWin
     for (std::size_t i = 0; i < n; ++i) {
         const double inv_m = cloth.inv_mass[i];
         if (inv_m == 0.0) continue; // pinned: does not move
-        b.omega2_max = std::max(b.omega2_max, 2.0 * sum_k[i] * inv_m);
-        b.gamma_max = std::max(b.gamma_max, 2.0 * sum_kd[i] * inv_m + aero_gamma[i]);
-        b.aero_gamma_max = std::max(b.aero_gamma_max, aero_gamma[i]);
+        b.omega2_max = std::max(b.omega2_max, 2.0 * sum_k[i] * inv_m + aero_t.omega2[i]);
+        b.gamma_max = std::max(b.gamma_max, 2.0 * sum_kd[i] * inv_m + aero_t.gamma[i]);
+        b.aero_gamma_max = std::max(b.aero_gamma_max, aero_t.gamma[i]);
         const double m = 1.0 / inv_m;
         min_mass = min_mass == 0.0 ? m : std::min(min_mass, m);
     }
