@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include <tbb/global_control.h>
@@ -110,6 +111,7 @@ TEST(HealthMonitor, StepThrowsBlowUpErrorAndRestoresTheLastHealthyCheck) {
         sim.step(HealthMonitor::check_every);
         FAIL() << "no BlowUpError";
     } catch (const BlowUpError& e) {
+        std::printf("%s\n", e.what());
         EXPECT_NE(std::string(e.what()).find("substep " + std::to_string(at + HealthMonitor::check_every)),
                   std::string::npos)
             << e.what();

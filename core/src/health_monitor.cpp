@@ -245,14 +245,17 @@ std::string HealthMonitor::check(const Cloth& cloth, const SimulationParams& par
             << ") fighting the springs: raise the ratio or the passes, or lower the stiffness";
     else if (started_inside_ > 0)
         msg << "the cloth started inside colliders (" << started_inside_ << " particles): move the cloth or the colliders";
-    else if (dt_bound_ > 0.0 && params.dt > 0.5 * dt_bound_)
+    else if (user_speed_ > 0.0f)
+        msg << "a fast grab (up to " << user_speed_ << " m/s): move the grabbed particle more slowly";
+    else if (dt_bound_ > 0.0 && params.dt > 0.9 * dt_bound_)
         msg << "dt too close to the stability bound (dt = " << params.dt << " s, bound " << dt_bound_
             << " s): use a smaller dt (the default is 0.9 x the bound)";
     else if (params.aero.enabled)
         msg << "an aerodynamic load far above what the springs hold: lower the aero density, drag coefficient or "
                "wind speed, or raise the stiffness";
     else
-        msg << "a force the scene cannot supply (a fast grab or a parameter change): lower dt or the stiffness";
+        msg << "a force the scene cannot supply (the state was changed from outside the simulation): lower dt or "
+               "the stiffness";
     msg << "; the state is back at substep " << snap_step_;
     return msg.str();
 }
