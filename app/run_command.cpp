@@ -228,8 +228,9 @@ int run_command(const RunOptions& o) {
     }
     if (sp.strain_limit.ratio > 0.0f && !(health.max_limited_stretch <= 1.1f * sp.strain_limit.ratio))
         std::cerr << "drape run: warning: strain limit " << sp.strain_limit.ratio << " not honoured: max stretch "
-                  << health.max_limited_stretch << " after " << sp.strain_limit.passes
-                  << " passes; raise --strain-passes (1-100) or the ratio" << std::endl;
+                  << health.max_limited_stretch << " (more than 1.1 x the limit) after up to "
+                  << strain_limit_max_passes << " sweeps per substep; raise the ratio or lower the stiffness"
+                  << std::endl;
     return exit_code::ok;
 }
 
