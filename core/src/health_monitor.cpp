@@ -2,6 +2,7 @@
 #include "drape/health_monitor.hpp"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include <tbb/parallel_for.h>
@@ -40,6 +41,8 @@ void HealthMonitor::init(const Cloth& cloth, const SimulationParams& params) {
     for (auto* v : {&block_ke_, &block_mass_, &block_cx_, &block_cy_, &block_cz_}) v->assign(blocks, 0.0);
     block_speed_.assign(blocks, 0.0f);
     chunk_strain_.assign((cloth.edges.size() + strain_chunk - 1) / strain_chunk, 0.0f);
+    chunk_elastic_.assign(chunk_strain_.size(), 0.0);
+    block_box_.assign(7 * blocks, 0.0f);
     for (auto* v : {&snap_x_, &snap_y_, &snap_z_, &snap_u_, &snap_v_, &snap_w_}) v->assign(n, 0.0f);
     k_struct_ = cloth.material[static_cast<std::size_t>(SpringKind::structural)].stiffness;
     rest_min_ = 0.0;
@@ -134,22 +137,47 @@ template <bool Parallel>
 void HealthMonitor::rebaseline(const Cloth& cloth, const SimulationParams& params, const StateBuffer& s,
                                std::size_t step) {
     const Reduced r = reduce<Parallel>(cloth, params, s);
-    // Elastic energy of every spring (seams included) and the cloth's extent: once per baseline.
+    // Elastic energy of every spring (seams included) and the cloth's extent: once per baseline, per fixed chunk /
+    // block, combined in order.
+    const std::size_t springs = cloth.edges.size(), n = cloth.particle_count;
+    for_each_index<Parallel>(chunk_elastic_.size(), [&](std::size_t ch) {
+        double e = 0.0;
+        for (std::size_t k = ch * strain_chunk, end = std::min(springs, (ch + 1) * strain_chunk); k < end; ++k) {
+            const Edge& edge = cloth.edges[k];
+            const float dx = s.x[edge.b] - s.x[edge.a], dy = s.y[edge.b] - s.y[edge.a], dz = s.z[edge.b] - s.z[edge.a];
+            const double stretch = std::sqrt(double(dx) * dx + double(dy) * dy + double(dz) * dz) - edge.rest;
+            e += 0.5 * cloth.material[static_cast<std::size_t>(edge.kind)].stiffness * stretch * stretch;
+        }
+        chunk_elastic_[ch] = e;
+    });
+    for_each_index<Parallel>(cloth.block_count(), [&](std::size_t b) {
+        const std::size_t begin = b * block_particles, end = std::min(begin + block_particles, n);
+        float* box = &block_box_[7 * b]; // lo x y z, hi x y z, max inverse mass
+        for (int k = 0; k < 3; ++k) {
+            box[k] = std::numeric_limits<float>::max();
+            box[3 + k] = std::numeric_limits<float>::lowest();
+        }
+        box[6] = 0.0f;
+        for (std::size_t i = begin; i < end; ++i) {
+            const float p[3] = {s.x[i], s.y[i], s.z[i]};
+            for (int k = 0; k < 3; ++k) {
+                box[k] = std::min(box[k], p[k]);
+                box[3 + k] = std::max(box[3 + k], p[k]);
+            }
+            box[6] = std::max(box[6], cloth.inv_mass[i]);
+        }
+    });
     double elastic = 0.0;
-    for (const Edge& e : cloth.edges) {
-        const float dx = s.x[e.b] - s.x[e.a], dy = s.y[e.b] - s.y[e.a], dz = s.z[e.b] - s.z[e.a];
-        const double stretch = std::sqrt(double(dx) * dx + double(dy) * dy + double(dz) * dz) - e.rest;
-        elastic += 0.5 * cloth.material[static_cast<std::size_t>(e.kind)].stiffness * stretch * stretch;
-    }
+    for (double e : chunk_elastic_) elastic += e;
     float lo[3] = {s.x[0], s.y[0], s.z[0]}, hi[3] = {s.x[0], s.y[0], s.z[0]};
     float max_inv_mass = 0.0f;
-    for (std::size_t i = 0; i < cloth.particle_count; ++i) {
-        max_inv_mass = std::max(max_inv_mass, cloth.inv_mass[i]);
-        const float p[3] = {s.x[i], s.y[i], s.z[i]};
+    for (std::size_t b = 0; b < cloth.block_count(); ++b) {
+        const float* box = &block_box_[7 * b];
         for (int k = 0; k < 3; ++k) {
-            lo[k] = std::min(lo[k], p[k]);
-            hi[k] = std::max(hi[k], p[k]);
+            lo[k] = std::min(lo[k], box[k]);
+            hi[k] = std::max(hi[k], box[3 + k]);
         }
+        max_inv_mass = std::max(max_inv_mass, box[6]);
     }
     ke_b_ = r.ke;
     elastic_b_ = elastic;

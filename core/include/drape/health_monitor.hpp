@@ -89,6 +89,8 @@ class HealthMonitor {
 
     std::vector<double> block_ke_, block_mass_, block_cx_, block_cy_, block_cz_;
     std::vector<float> block_speed_, chunk_strain_;
+    std::vector<double> chunk_elastic_; ///< rebaseline: elastic energy per spring chunk
+    std::vector<float> block_box_;      ///< rebaseline: per block, bounding box (6) and largest inverse mass
     std::vector<float> snap_x_, snap_y_, snap_z_, snap_u_, snap_v_, snap_w_; ///< the restore point
     std::size_t snap_step_ = 0;
     // Baseline.
