@@ -9,6 +9,7 @@
 
 #include <tbb/global_control.h>
 
+#include "drape/colliders.hpp"
 #include "drape/scene.hpp"
 #include "test_helpers.hpp"
 
@@ -220,4 +221,23 @@ TEST(HealthMonitor, FiguresDoNotDependOnTheThreadCountOrTheSerialTwin) {
         EXPECT_EQ(f.max_speed, one.max_speed);
         EXPECT_EQ(f.speed_bound, one.speed_bound);
     }
+}
+
+// The collide stage's hold (colliders.hpp): a point that started the substep inside the collider it is found in is put
+// back at its start, at rest, instead of being projected across the solid; without the start positions it is projected.
+TEST(CollideHealth, PointThatStartedInsideIsHeldNotTeleported) {
+    const std::vector<Collider> slab = {make_plane({0.0f, 0.1f, 0.0f}, {0.0f, 1.0f, 0.0f}, {0.0f, 0.0f}),
+                                        make_plane({0.0f, -0.1f, 0.0f}, {0.0f, -1.0f, 0.0f}, {0.0f, 0.0f})};
+    // Every point is inside one of the two half-spaces: their projections disagree forever.
+    const float start_x = 0.0f, start_y = 0.0f, start_z = 0.0f, w = 1.0f;
+    float x = 0.0f, y = 0.02f, z = 0.0f, vx = 1.0f, vy = 2.0f, vz = 0.0f;
+    collide_range(slab, &x, &y, &z, &vx, &vy, &vz, &w, 0, 1, &start_x, &start_y, &start_z);
+    EXPECT_EQ(y, 0.0f);
+    EXPECT_EQ(vx, 0.0f);
+    EXPECT_EQ(vy, 0.0f);
+    float x2 = 0.0f, y2 = 0.02f, z2 = 0.0f, vx2 = 1.0f, vy2 = 2.0f, vz2 = 0.0f;
+    collide_range(slab, &x2, &y2, &z2, &vx2, &vy2, &vz2, &w, 0, 1);
+    EXPECT_NE(y2, 0.02f) << "without start positions the point is projected";
+    // Speed never grows either way: the response only removes velocity.
+    EXPECT_LE(vx2 * vx2 + vy2 * vy2 + vz2 * vz2, 1.0f + 4.0f);
 }
