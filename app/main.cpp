@@ -104,7 +104,7 @@ int main(int argc, char** argv) {
     cmd->add_option("--strain-limit", run.strain_limit,
                     "Provot strain limiting: largest stretch of structural, shear and seam springs (0.1 = 10%; 0 = off)")
         ->check(in_range<float>(0.0f, 10.0f));
-    cmd->add_option("--strain-passes", run.strain_passes, "Strain-limiting sweeps over all colour groups [scene's, 4]")
+    cmd->add_option("--strain-passes", run.strain_passes, "Least strain-limiting sweeps over all colour groups (more, up to 100, while a spring is over 1.05 x the limit) [scene's, 4]")
         ->check(in_range<std::uint32_t>(1, 100));
     cmd->add_option("--strain-every", run.strain_every, "Run strain limiting after every K-th substep [scene's, 1]")
         ->check(in_range<std::uint32_t>(1, 1000));

@@ -126,7 +126,7 @@ int run_command(const RunOptions& o) {
 
     BuiltScene scene = workers.run([&] { return build_scene(spec); });
     SimulationParams sp = scene.params;
-    const StabilityBound bound = stability_bound(scene.cloth, sp.air_drag);
+    const StabilityBound bound = stability_bound(scene.cloth, sp);
     const bool dt_default = !spec.dt.has_value();
     // A dt above the bound: the message names where it came from (the flag, or the scene file's field).
     if (!dt_default) check_stability(scene.cloth, sp, o.dt ? std::string("--dt") : spec.source + ": physics.dt");
@@ -149,7 +149,7 @@ int run_command(const RunOptions& o) {
         workers.run([&] { exporter->write(sim, frames_written++); });
     }
 
-    std::string error;
+    std::string error, blow_up;
     Progress progress(steps);
     const auto start = clock_type::now();
     try {
@@ -165,6 +165,8 @@ int run_command(const RunOptions& o) {
                 if (exporter && (done % o.export_every == 0 || done == steps)) exporter->write(sim, frames_written++);
             }
         });
+    } catch (const BlowUpError& e) {
+        blow_up = e.what(); // the health monitor: finite, but not healthy (exit code 4)
     } catch (const SimulationError& e) {
         error = e.what();
     }
@@ -214,7 +216,22 @@ int run_command(const RunOptions& o) {
     j["stages"] = sim.stage_names();
     j["max_strain"] = health.max_structural_strain;
     j["kinetic_energy"] = health.kinetic_energy;
+    j["max_speed"] = health.max_speed;
     j["finite"] = health.finite && error.empty();
+    j["healthy"] = health.finite && error.empty() && blow_up.empty();
+    if (!blow_up.empty()) j["health_error"] = blow_up;
+    j["health"] = {{"substep", health.monitor.substep},
+                   {"kinetic_energy", health.monitor.kinetic_energy},
+                   {"energy_bound", health.monitor.energy_bound},
+                   {"max_strain", health.monitor.max_strain},
+                   {"strain_bound", health.monitor.strain_bound},
+                   {"max_speed", health.monitor.max_speed},
+                   {"speed_bound", health.monitor.speed_bound}};
+    if (sp.strain_limit.ratio > 0.0f) {
+        // What the strain limit achieved: the largest stretch of the springs it limits, honoured within 10 %.
+        j["strain_limit_max_stretch"] = health.max_limited_stretch;
+        j["strain_limit_honoured"] = health.max_limited_stretch <= 1.1f * sp.strain_limit.ratio;
+    }
     j["checksum"] = hex64(sim.checksum());
     j["origin"] = sim.origin(); // m: positions are stored relative to it (the cloth's centre)
     if (!error.empty()) j["error"] = error;
@@ -233,12 +250,27 @@ int run_command(const RunOptions& o) {
         std::printf("  max structural strain %.4f, kinetic energy %.4g J, finite %s, checksum %s\n",
                     double(health.max_structural_strain), health.kinetic_energy,
                     (health.finite && error.empty()) ? "yes" : "no", hex64(sim.checksum()).c_str());
+        std::printf("  healthy %s (last check at substep %zu: kinetic energy %.4g J of %.4g, strain %.4g of %.4g, "
+                    "speed %.4g of %.4g m/s)\n",
+                    blow_up.empty() && error.empty() ? "yes" : "no", health.monitor.substep,
+                    health.monitor.kinetic_energy, health.monitor.energy_bound, double(health.monitor.max_strain),
+                    double(health.monitor.strain_bound), double(health.monitor.max_speed),
+                    double(health.monitor.speed_bound));
+    }
+    if (!blow_up.empty()) {
+        std::cerr << "drape run: " << blow_up << std::endl;
+        return exit_code::blow_up;
     }
     if (!error.empty()) {
         std::cerr << "drape run: " << error << std::endl;
-        return 3;
+        return exit_code::non_finite;
     }
-    return 0;
+    if (sp.strain_limit.ratio > 0.0f && !(health.max_limited_stretch <= 1.1f * sp.strain_limit.ratio))
+        std::cerr << "drape run: warning: strain limit " << sp.strain_limit.ratio << " not honoured: max stretch "
+                  << health.max_limited_stretch << " (more than 1.1 x the limit) after up to "
+                  << strain_limit_max_passes << " sweeps per substep; raise the ratio or lower the stiffness"
+                  << std::endl;
+    return exit_code::ok;
 }
 
 } // namespace drape::app

@@ -155,18 +155,22 @@ std::array<SpringMaterial, spring_kind_count> ViewSession::materials(const Fabri
     return out;
 }
 
-double ViewSession::bound_for(const FabricSettings& f, float air_drag) const {
+double ViewSession::bound_for(const FabricSettings& f, float air_drag, const AeroWind& aero) const {
+    SimulationParams p;
+    p.air_drag = air_drag;
+    p.aero = aero; // the aerodynamic wind's drag and turning stiffness bound dt too (stability.hpp)
     if (grid_scene()) {
         // The Gershgorin bound is a maximum over particles; in a uniform grid every interior particle of an 8
-        // x 8 grid already has all twelve springs, so a small probe cloth with the same node mass and
+        // x 8 grid already has all twelve springs, so a small probe cloth with the same node mass, spacing and
         // materials gives the bound of the full cloth without copying it.
         HangParams probe = spec_.grid;
         probe.n = std::min<std::uint32_t>(size_, 8);
+        probe.size = spec_.grid.size * float(probe.n - 1) / float(std::max<std::uint32_t>(size_, 2) - 1);
         probe.total_mass = f.node_mass_g * 1e-3f * float(probe.n * probe.n);
         probe.pins = GridPins::none;
         SceneBuild s = build_hang_scene(probe);
         apply_materials(s.cloth, materials(f));
-        return stability_bound(s.cloth, air_drag).dt_max;
+        return stability_bound(s.cloth, p).dt_max;
     }
     // Other cloths: the bound over a copy of the topology with every particle movable (pinned ones too: they
     // may be unpinned later) at the new node mass.
@@ -179,8 +183,9 @@ double ViewSession::bound_for(const FabricSettings& f, float air_drag) const {
     for (std::size_t i = 0; i < c.particle_count; ++i)
         probe.inv_mass[i] = inv;
     probe.edges = c.edges;
+    probe.triangles = c.triangles;
     probe.material = materials(f);
-    return stability_bound(probe, air_drag).dt_max;
+    return stability_bound(probe, p).dt_max;
 }
 
 int ViewSession::auto_substep_count(double dt) const {
@@ -284,7 +289,7 @@ ViewSession::Built ViewSession::build(Snapshot t, const KeepState* keep_state, b
 
     // Run parameters: the user's (kept across rebuilds), the scene's colliders.
     t.params.colliders = scene.params.colliders;
-    t.dt_bound = stability_bound(cloth, t.params.air_drag).dt_max;
+    t.dt_bound = stability_bound(cloth, t.params).dt_max;
     if (t.auto_dt || !(t.params.dt > 0.0f) || t.params.dt > t.dt_bound)
         t.params.dt = static_cast<float>(0.9 * t.dt_bound);
     // The new simulation is complete before it replaces the old one: if anything throws, the old one stays.
@@ -639,7 +644,7 @@ void ViewSession::set_size(std::uint32_t n) {
 bool ViewSession::apply_physics(const Candidate& next, const std::string& what, const std::string& key) {
     if (busy(what)) return false;
     const Snapshot before = snapshot();
-    const double bound = bound_for(next.fabric, next.air_drag);
+    const double bound = bound_for(next.fabric, next.air_drag, next.aero);
     const double old_dt = sim_->params().dt;
     double new_dt = old_dt;
     if (auto_dt_ || old_dt > bound) new_dt = 0.9 * bound;
@@ -762,7 +767,7 @@ void ViewSession::set_aero(const AeroWind& aero) {
 
 void ViewSession::set_node_mass(float grams) {
     grams = std::clamp(grams, view_min_node_mass_g, view_max_node_mass_g);
-    const double bound = bound_for({grams, fabric_.stiffness, fabric_.damping_ratio}, params_.air_drag);
+    const double bound = bound_for({grams, fabric_.stiffness, fabric_.damping_ratio}, params_.air_drag, params_.aero);
     const double old_dt = sim_->params().dt;
     double new_dt = (auto_dt_ || old_dt > bound) ? 0.9 * bound : old_dt;
     int new_substeps = substeps_;

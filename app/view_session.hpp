@@ -251,7 +251,7 @@ class ViewSession {
         AeroWind aero;
     };
     static std::array<SpringMaterial, spring_kind_count> materials(const FabricSettings& f);
-    double bound_for(const FabricSettings& f, float air_drag) const;
+    double bound_for(const FabricSettings& f, float air_drag, const AeroWind& aero) const;
     int auto_substep_count(double dt) const;
     /// Manual substeps: enough substeps of dt to cover frame_time_ (may exceed view_max_substeps: callers
     /// refuse).

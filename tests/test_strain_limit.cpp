@@ -20,9 +20,8 @@ Simulation soft_hang(std::uint32_t n, StrainLimit limit, Integrator integ = Inte
     return Simulation(std::move(scene.cloth), scene.initial, p);
 }
 
-// After the passes, every structural spring is within the limit (+1e-3), at every sample of a 1 s run of a soft
-// "hang" at N = 100 that overstretches by far without limiting. (The groups run from the pins outward, so 4 passes
-// suffice; plain Gauss-Seidel order needed more than 32: docs/garments.md.)
+// After the sweeps, every structural spring is within 1.05 x the limit (the sweeps go on while one is over it), at
+// every sample of a 1 s run of a soft "hang" at N = 100 that overstretches by far without limiting.
 TEST(StrainLimit, KeepsMaxStrainWithinTheLimitAtN100) {
     Simulation free_cloth = soft_hang(100, {0.0f, 1, 1});
     Simulation limited = soft_hang(100, {0.1f, 4, 1});
@@ -35,7 +34,7 @@ TEST(StrainLimit, KeepsMaxStrainWithinTheLimitAtN100) {
         worst_free = std::max(worst_free, free_cloth.health().max_structural_strain);
     }
     EXPECT_GT(worst_free, 0.12f) << "the test needs a cloth that overstretches";
-    EXPECT_LE(worst, 0.1f + 1e-3f);
+    EXPECT_LE(worst, 0.1f * 1.05f);
     EXPECT_TRUE(limited.health().finite);
 }
 

@@ -1,7 +1,9 @@
 // Stage 6: collisions with analytic colliders (core/src/colliders.cpp has the geometry). Runs on the state just
 // written by integration and strain limiting, per fixed particle block, so no particle is left inside a collider at
-// the end of a substep. Verlet stores x_prev, not v: the block's velocities are made explicit in scratch, collided,
-// and x_prev rewritten only where the collision changed something (others keep their exact bits).
+// the end of a substep (a point stuck between overlapping colliders whose projections disagree is held at its
+// position from the start of the substep, at rest: collide_range). Verlet stores x_prev, not v: the block's
+// velocities are made explicit in scratch, collided, and x_prev rewritten only where the collision changed
+// something (others keep their exact bits).
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -15,11 +17,14 @@ template <bool Parallel> void Simulation::collide_stage(StateBuffer& out) {
     const std::size_t n = cloth_.particle_count;
     const bool verlet = params_.integrator == Integrator::verlet;
     const float dt = params_.dt, inv_dt = 1.0f / params_.dt;
+    // Positions at the start of the substep: where a point stuck between overlapping colliders is held.
+    const StateBuffer& start = buffers_[current_];
+    const float *hx = start.x.data(), *hy = start.y.data(), *hz = start.z.data();
     auto block = [&](std::size_t b) {
         const std::size_t begin = b * block_particles, end = std::min(begin + block_particles, n);
         if (!verlet) {
             collide_range(colliders, out.x.data(), out.y.data(), out.z.data(), out.u.data(), out.v.data(),
-                          out.w.data(), cloth_.inv_mass.data(), begin, end);
+                          out.w.data(), cloth_.inv_mass.data(), begin, end, hx, hy, hz);
             return;
         }
         // Scratch: ax..az hold velocities, fx..fz the positions before the collision.
@@ -34,7 +39,7 @@ template <bool Parallel> void Simulation::collide_stage(StateBuffer& out) {
             pz[i] = out.z[i];
         }
         collide_range(colliders, out.x.data(), out.y.data(), out.z.data(), vx, vy, vz, cloth_.inv_mass.data(), begin,
-                      end);
+                      end, hx, hy, hz);
         for (std::size_t i = begin; i < end; ++i) {
             if (out.x[i] == px[i] && out.y[i] == py[i] && out.z[i] == pz[i]) continue;
             out.u[i] = out.x[i] - vx[i] * dt;

@@ -242,7 +242,19 @@ struct SoA {
     float* __restrict vy;
     float* __restrict vz;
     const float* __restrict inv_mass;
+    /// Positions at the start of the substep (nullptr: not known, every point inside is projected).
+    const float* hold_x = nullptr;
+    const float* hold_y = nullptr;
+    const float* hold_z = nullptr;
 };
+
+/// Puts particle i back where it started the substep, at rest.
+inline void hold(const SoA& s, std::size_t i) noexcept {
+    s.x[i] = s.hold_x[i];
+    s.y[i] = s.hold_y[i];
+    s.z[i] = s.hold_z[i];
+    s.vx[i] = s.vy[i] = s.vz[i] = 0.0f;
+}
 
 template <ColliderKind K>
 std::size_t collide_chunk_with(const Collider& col, const SoA& s, std::size_t begin,
@@ -259,6 +271,13 @@ std::size_t collide_chunk_with(const Collider& col, const SoA& s, std::size_t be
     for (std::size_t k = 0; k < n; ++k) {
         if (!flag[k]) continue;
         const std::size_t i = begin + k;
+        if (s.hold_x && inside_kind<K>(col, s.hold_x[i], s.hold_y[i], s.hold_z[i])) {
+            // It started the substep inside this collider (the cloth was placed inside it) and is still inside:
+            // projecting it out would teleport it across the solid and stretch its springs (energy from
+            // nowhere). It is held at rest until the dynamics carry it out.
+            hold(s, i);
+            continue;
+        }
         const Projection pr = project_kind<K>(col, s.x[i], s.y[i], s.z[i]);
         s.x[i] = pr.point[0];
         s.y[i] = pr.point[1];
@@ -557,20 +576,46 @@ void collide_range(const Collider& col, float* x, float* y, float* z, float* vx,
         collide_chunk_any(col, s, c, std::min(end, c + collide_chunk));
 }
 
+namespace {
+
+bool inside_kernel(const Collider& col, float x, float y, float z) noexcept {
+    switch (col.kind) {
+    case ColliderKind::plane: return inside_kind<ColliderKind::plane>(col, x, y, z);
+    case ColliderKind::sphere: return inside_kind<ColliderKind::sphere>(col, x, y, z);
+    case ColliderKind::disc: return inside_kind<ColliderKind::disc>(col, x, y, z);
+    case ColliderKind::capsule: return inside_kind<ColliderKind::capsule>(col, x, y, z);
+    case ColliderKind::ellipsoid: return inside_kind<ColliderKind::ellipsoid>(col, x, y, z);
+    }
+    return false;
+}
+
+} // namespace
+
 void collide_range(std::span<const Collider> colliders, float* x, float* y, float* z, float* vx, float* vy,
-                   float* vz, const float* inv_mass, std::size_t begin, std::size_t end) noexcept {
+                   float* vz, const float* inv_mass, std::size_t begin, std::size_t end, const float* hold_x,
+                   const float* hold_y, const float* hold_z) noexcept {
     // Per chunk: passes over the colliders in order until a pass finds no contact (at most 4). A particle's
     // own sequence of projections is the same as if it were processed alone: further passes leave a clean
     // particle alone.
     constexpr int max_passes = 4;
-    const SoA s{x, y, z, vx, vy, vz, inv_mass};
+    const SoA s{x, y, z, vx, vy, vz, inv_mass, hold_x, hold_y, hold_z};
     for (std::size_t c = begin; c < end; c += collide_chunk) {
         const std::size_t c_end = std::min(end, c + collide_chunk);
+        std::size_t contacts = 0;
         for (int pass = 0; pass < max_passes; ++pass) {
-            std::size_t contacts = 0;
+            contacts = 0;
             for (const Collider& col : colliders)
                 contacts += collide_chunk_any(col, s, c, c_end);
             if (contacts == 0) break;
+        }
+        if (contacts == 0 || hold_x == nullptr) continue;
+        // Overlapping colliders whose projections disagree (each pushes the point into the other): the point is
+        // held where it started the substep, at rest, instead of jumping between their surfaces every substep.
+        for (std::size_t i = c; i < c_end; ++i) {
+            if (inv_mass[i] == 0.0f) continue;
+            bool inside = false;
+            for (const Collider& col : colliders) inside = inside || inside_kernel(col, x[i], y[i], z[i]);
+            if (inside) hold(s, i);
         }
     }
 }

@@ -1,4 +1,5 @@
-// Health figures on request: max structural strain, kinetic energy, finite flag. Block partials are combined in
+// Health figures on request: max structural strain, kinetic energy, finite flag, max speed, max stretch of the
+// strain-limited springs; plus the health monitor's last figures. Block partials are combined in
 // block order so the figures, like the state, do not depend on the thread count.
 #include <cmath>
 #include <vector>
@@ -16,10 +17,12 @@ Health Simulation::health() const {
     const std::size_t blocks = cloth_.block_count();
     std::vector<double> energy(blocks, 0.0);
     std::vector<std::uint8_t> finite(blocks, 1);
+    std::vector<float> speed(blocks, 0.0f);
     tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
         const std::size_t begin = b * block_particles, end = std::min(begin + block_particles, n);
         double e = 0.0;
         bool ok = true;
+        float v2max = 0.0f;
         for (std::size_t i = begin; i < end; ++i) {
             ok = ok && std::isfinite(s.x[i]) && std::isfinite(s.y[i]) && std::isfinite(s.z[i]) &&
                  std::isfinite(s.u[i]) && std::isfinite(s.v[i]) && std::isfinite(s.w[i]);
@@ -27,23 +30,32 @@ Health Simulation::health() const {
             if (inv_m == 0.0f) continue;
             const std::array<float, 3> v = velocity(i);
             e += 0.5 / inv_m * (double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
+            const float v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            if (!(v2 <= v2max)) v2max = v2;
         }
         energy[b] = e;
         finite[b] = ok ? 1 : 0;
+        speed[b] = std::sqrt(v2max);
     });
     Health h;
     for (std::size_t b = 0; b < blocks; ++b) {
         h.kinetic_energy += energy[b];
         h.finite = h.finite && finite[b];
+        if (!(speed[b] <= h.max_speed)) h.max_speed = speed[b];
     }
-    float max_strain = 0.0f;
+    float max_strain = 0.0f, max_stretch = 0.0f;
     for (const Edge& e : cloth_.edges) {
-        if (e.kind != SpringKind::structural) continue;
+        if (e.kind == SpringKind::bend) continue;
         const float dx = s.x[e.b] - s.x[e.a], dy = s.y[e.b] - s.y[e.a], dz = s.z[e.b] - s.z[e.a];
-        const float strain = std::fabs(std::sqrt(dx * dx + dy * dy + dz * dz) - e.rest) / e.rest;
+        const float signed_strain = (std::sqrt(dx * dx + dy * dy + dz * dz) - e.rest) / e.rest;
+        if (!(signed_strain <= max_stretch)) max_stretch = signed_strain;
+        if (e.kind != SpringKind::structural) continue;
+        const float strain = std::fabs(signed_strain);
         if (!(strain <= max_strain)) max_strain = strain; // NaN propagates as the maximum
     }
     h.max_structural_strain = max_strain;
+    h.max_limited_stretch = max_stretch; // structural, shear and seam: the springs strain limiting acts on
+    h.monitor = monitor_.figures();
     return h;
 }
 

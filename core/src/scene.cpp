@@ -874,7 +874,7 @@ BuiltScene build_scene(const SceneSpec& s) {
     const std::array<double, 3>& origin = out.cloth.origin;
     for (Collider& c : out.params.colliders)
         c = translated(c, {-origin[0], -origin[1], -origin[2]});
-    out.params.dt = s.dt ? *s.dt : static_cast<float>(default_dt(out.cloth, out.params.air_drag));
+    out.params.dt = s.dt ? *s.dt : static_cast<float>(default_dt(out.cloth, out.params));
     if (s.state) apply_state(*s.state, out);
     return out;
 }

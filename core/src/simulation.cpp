@@ -114,6 +114,15 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
         store_velocity(s, i, pinned ? std::array<float, 3>{} : std::array{initial.vx[i], initial.vy[i], initial.vz[i]},
                        params_.integrator, params_.dt);
     }
+    monitor_.init(cloth_, params_);
+    std::size_t inside = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        bool in = false;
+        for (const Collider& c : params_.colliders) in = in || is_inside(c, {s.x[i], s.y[i], s.z[i]});
+        inside += in && cloth_.inv_mass[i] != 0.0f;
+    }
+    monitor_.set_started_inside(inside);
+    monitor_.rebaseline<true>(cloth_, params_, s, 0);
 }
 
 void Simulation::store_velocity(StateBuffer& s, std::size_t i, std::array<float, 3> vel, Integrator integrator,
@@ -150,6 +159,8 @@ void Simulation::set_params(const SimulationParams& params) {
     kernel_ = kernel;
     if (params_.strain_limit.ratio > 0.0f) cook_strain_limit();
     if (params_.aero.enabled) cook_aero();
+    monitor_.init(cloth_, params_);
+    rebaseline_ = true;
 }
 
 void Simulation::set_material(SpringKind kind, SpringMaterial material) {
@@ -163,6 +174,8 @@ void Simulation::set_material(SpringKind kind, SpringMaterial material) {
         apply_materials(cloth_, previous);
         throw;
     }
+    monitor_.init(cloth_, params_);
+    rebaseline_ = true;
 }
 
 void Simulation::set_pinned(std::size_t i, bool pinned) {
@@ -174,6 +187,7 @@ void Simulation::set_pinned(std::size_t i, bool pinned) {
         return;
     }
     if (!pinned && inv_mass_free_[i] == 0.0f) return; // a particle with no known mass stays pinned
+    rebaseline_ = true;
     cloth_.inv_mass[i] = pinned ? 0.0f : inv_mass_free_[i];
     if (pinned) store_velocity(cur(), i, {}, params_.integrator, params_.dt);
 }
@@ -189,6 +203,8 @@ void Simulation::grab(std::size_t i, std::array<float, 3> target) {
     set_pinned(i, true);
     grabbed_ = i;
     grab_target_ = target;
+    grab_applied_ = target;
+    rebaseline_ = true;
 }
 
 void Simulation::release_grab() noexcept {
@@ -196,6 +212,7 @@ void Simulation::release_grab() noexcept {
     const std::size_t i = grabbed_;
     grabbed_ = SIZE_MAX;
     if (!grabbed_was_pinned_) cloth_.inv_mass[i] = inv_mass_free_[i];
+    rebaseline_ = true;
 }
 
 void Simulation::apply_user_constraints() noexcept {

@@ -2,7 +2,8 @@
 //   stage 0a aero_forces (aero_forces.cpp, per triangle, gathered per particle) when aerodynamic wind is on;
 //   stage 0b seam_forces (seam_forces.cpp, colour groups) when the cloth has seams;
 //   stages 1-3 (external forces, spring forces, integrate + pins): fused or staged, below;
-//   stage 5 strain_limit (strain_limit.cpp) and stage 6 collide (collide.cpp) on the freshly written buffer.
+//   stage 5 strain_limit (strain_limit.cpp) and stage 6 collide (collide.cpp) on the freshly written buffer,
+//   interleaved (sweep, collide, sweep, collide, ...) when both run.
 //
 // Fused (default): for each SIMD batch of a block, load the particle's own state once, sum its springs
 // (stage 2), add external accelerations (stage 1), integrate and apply pins (stage 3), store into the other state
@@ -147,7 +148,20 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
     const Integrator integ = params_.integrator;
     const bool wind = params_.wind.enabled;
     const bool seams = !cloth_.seams.empty(), aero = params_.aero.enabled, extra = extra_forces();
+    if (grabbed_ != SIZE_MAX && grab_target_ != grab_applied_) {
+        // The user moved the grab: its speed enters the monitor's speed bound, and the work it did its energy
+        // balance (restarted below, after the grabbed particle has moved).
+        const float dx = grab_target_[0] - grab_applied_[0], dy = grab_target_[1] - grab_applied_[1],
+                    dz = grab_target_[2] - grab_applied_[2];
+        if (count > 0) monitor_.note_user_speed(std::sqrt(dx * dx + dy * dy + dz * dz) / (float(count) * params_.dt));
+        grab_applied_ = grab_target_;
+        rebaseline_ = true;
+    }
     apply_user_constraints();
+    if (rebaseline_) {
+        monitor_.rebaseline<Parallel>(cloth_, params_, cur(), steps_done_);
+        rebaseline_ = false;
+    }
     for (std::size_t n = 0; n < count; ++n) {
         const kernels::StepContext c = make_context(steps_done_);
         if (aero) aero_forces_stage<Parallel>();
@@ -171,11 +185,23 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
             });
         }
         check_blocks(steps_done_);
-        strain_limit_stage<Parallel>(buffers_[1 - current_]);
-        collide_stage<Parallel>(buffers_[1 - current_]);
+        // Strain limiting and collisions: when limiting is due, each sweep is followed by a collide (both honoured:
+        // a point a collider moved is limited again, and collide runs last); otherwise collide alone.
+        StateBuffer& out = buffers_[1 - current_];
+        const bool collide = !params_.colliders.empty();
+        if (!strain_limit_stage<Parallel>(out, collide) && collide) collide_stage<Parallel>(out);
         current_ = 1 - current_;
         ++steps_done_;
+        if (steps_done_ % HealthMonitor::check_every == 0) check_health<Parallel>();
     }
+}
+
+/// The health monitor's check (health_monitor.hpp): on an explosion, back to the last check that passed and throw.
+template <bool Parallel> void Simulation::check_health() {
+    std::string problem = monitor_.check<Parallel>(cloth_, params_, cur(), steps_done_);
+    if (problem.empty()) return;
+    steps_done_ = monitor_.restore(cur(), cloth_.particle_count);
+    throw BlowUpError(problem);
 }
 
 void Simulation::step(std::size_t count) { step_impl<true>(count); }
@@ -184,7 +210,7 @@ void Simulation::step_serial(std::size_t count) { step_impl<false>(count); }
 void Simulation::run_stage(Stage stage) {
     if (stage == Stage::aero_forces) return params_.aero.enabled ? aero_forces_stage<true>() : void();
     if (stage == Stage::seam_forces) return cloth_.seams.empty() ? void() : seam_forces_stage<true>();
-    if (stage == Stage::strain_limit) return strain_limit_stage<true>(cur());
+    if (stage == Stage::strain_limit) return void(strain_limit_stage<true>(cur(), false));
     if (stage == Stage::collide) return collide_stage<true>(cur());
     const kernels::StepContext c = make_context(steps_done_);
     const Integrator integ = params_.integrator;

@@ -119,12 +119,18 @@ Vec3f ellipsoid_closest_point(Vec3f semi_axes, Vec3f q) noexcept;
 /// The collide stage over particles [begin, end) of structure-of-arrays state: positions (m) and velocities
 /// (m/s) in place; particles with inv_mass 0 are skipped. One collider, or several in order (a body): with
 /// several, the pass over them repeats (up to 4 times) while a particle of the chunk was still inside one of
-/// them (overlapping colliders can push a point from one into another). Results per particle do not depend on
-/// begin/end or chunking.
+/// them (overlapping colliders can push a point from one into another). With `hold_x/y/z` (the positions at the
+/// start of the substep), a point is held there at rest instead of projected when (a) it started the substep inside
+/// the collider it is found in (a cloth placed inside a solid: projecting would teleport it across the solid and
+/// stretch its springs), or (b) it is still inside one after the last pass (overlapping colliders whose projections
+/// disagree). The stage then never adds energy: it only removes velocity, and a held point is at rest where it was.
+/// Results per particle do not depend on begin/end or chunking.
 void collide_range(const Collider& collider, float* x, float* y, float* z, float* vx, float* vy, float* vz,
                    const float* inv_mass, std::size_t begin, std::size_t end) noexcept;
 void collide_range(std::span<const Collider> colliders, float* x, float* y, float* z, float* vx, float* vy,
-                   float* vz, const float* inv_mass, std::size_t begin, std::size_t end) noexcept;
+                   float* vz, const float* inv_mass, std::size_t begin, std::size_t end,
+                   const float* hold_x = nullptr, const float* hold_y = nullptr,
+                   const float* hold_z = nullptr) noexcept;
 
 /// Whether a point is inside a collider (inside the solid or closer than thickness to it), with `slack` (m)
 /// taken off the margin to allow for float rounding of a projected point: what the tests check after

@@ -21,6 +21,7 @@
 #include "drape/colliders.hpp"
 #include "drape/colouring.hpp"
 #include "drape/errors.hpp"
+#include "drape/health_monitor.hpp"
 
 namespace drape {
 
@@ -46,13 +47,16 @@ struct WindField {
     float strength = 2.0f; ///< m/s^2, 0..100
 };
 
+/// At least `passes` sweeps run; more, up to strain_limit_max_passes, while a sweep still finds a spring longer than
+/// (1 + 1.05 ratio) l0, so a limit that can hold does (within the 10 % that `drape run` calls honoured).
+inline constexpr std::uint32_t strain_limit_max_passes = 100;
 /// Provot strain limiting (seed 001 section 2; Provot 1995): after each substep, every structural, shear and seam
-/// spring longer than (1 + ratio) l0 has its ends moved toward each other, colour group by colour group, `passes`
-/// times. Groups are ordered outward from the cloth's authored pins (core/src/strain_limit.cpp), so one pass carries
+/// spring longer than (1 + ratio) l0 has its ends moved toward each other by inverse mass, colour group by colour
+/// group, `passes` times or more (above). Groups are ordered outward from the cloth's authored pins (core/src/strain_limit.cpp), so one pass carries
 /// the correction from the pins to the free edge.
 struct StrainLimit {
     float ratio = 0.0f;         ///< critical stretch, 0 = off, 0..10 (0.1 = 10%)
-    std::uint32_t passes = 4;   ///< sweeps over all groups each time it runs, 1..100
+    std::uint32_t passes = 4;   ///< least sweeps over all groups each time it runs, 1..100
     std::uint32_t every = 1;    ///< runs after every `every`-th substep, 1..1000 (1 = Provot: after each step)
 };
 
@@ -89,11 +93,16 @@ struct StateBuffer {
     AlignedArray<float> x, y, z, u, v, w;
 };
 
-/// Health figures computed on request (not per substep).
+/// Health figures computed on request (not per substep). The health monitor's own figures and bounds, from its last
+/// check (every HealthMonitor::check_every substeps), are in `monitor`.
 struct Health {
     float max_structural_strain = 0.0f; ///< max |l - l0| / l0 over structural springs
     double kinetic_energy = 0.0;        ///< J
     bool finite = true;
+    float max_speed = 0.0f;             ///< m/s, the fastest particle
+    /// Largest stretch (l - l0) / l0 over the strain-limited springs (structural, shear, seam); 0 without them.
+    float max_limited_stretch = 0.0f;
+    HealthFigures monitor;              ///< the monitor's last check: figures, bounds, healthy
 };
 
 /// Per-stage names in step order; the same strings label bench counters and profiler zones.
@@ -109,7 +118,9 @@ class Simulation {
     /// Advances `count` substeps of params().dt. Parallel over fixed particle blocks with oneTBB (the thread
     /// count is the caller's: call it inside drape::Workers::run, workers.hpp). Throws SimulationError naming
     /// the step and the particle if any value becomes non-finite; the state is then left at the last finite
-    /// step.
+    /// step. Every HealthMonitor::check_every substeps (counted from 0, whatever `count` is) the health monitor
+    /// checks the state; an explosion throws BlowUpError (a SimulationError) and leaves the state at the last
+    /// check that passed.
     void step(std::size_t count = 1);
 
     /// Same as step() but runs every stage serially on the calling thread (the "serial twin" of the parallel path).
@@ -149,6 +160,7 @@ class Simulation {
     // Constraints from the user (stage 7 of DESIGN.md; applied at the start of each step() call).
     /// Pins (inverse mass 0, velocity 0) or unpins (its mass restored; authored pins too, when the cloth knows their
     /// mass: Cloth::free_inv_mass) particle i. Throws InvalidInput if i is out of range.
+    /// (User actions - pins, grabs, set_params, set_material - restart the health monitor's energy balance.)
     void set_pinned(std::size_t i, bool pinned);
     bool is_pinned(std::size_t i) const noexcept { return cloth_.inv_mass[i] == 0.0f; }
     /// Grabs particle i: it becomes kinematic and is moved to `target` (m, relative to origin()) at the start
@@ -201,9 +213,10 @@ class Simulation {
     std::vector<std::uint8_t> limit_serial_; ///< per group: 1 = overflow group, run serially
     std::vector<std::uint32_t> limit_a_, limit_b_;
     std::vector<float> limit_rest_;
-    std::vector<std::uint8_t> limit_mode_; ///< per spring: 0 mass-weighted, 1 end a is inner (fixed), 2 end b is inner
     void cook_strain_limit();
-    template <bool Parallel> void strain_limit_stage(StateBuffer& out);
+    /// Runs strain limiting on `out` when it is due this substep (returns false when not); with `with_collide`, the
+    /// collide stage runs after every sweep (limit and collide interleaved, collide last).
+    template <bool Parallel> bool strain_limit_stage(StateBuffer& out, bool with_collide);
     template <bool Parallel> void collide_stage(StateBuffer& out);
     template <bool Parallel> void seam_forces_stage();
     template <bool Parallel> void aero_forces_stage();
@@ -217,6 +230,10 @@ class Simulation {
     std::size_t grabbed_ = SIZE_MAX;
     bool grabbed_was_pinned_ = false;
     std::array<float, 3> grab_target_{};
+    std::array<float, 3> grab_applied_{}; ///< the target the last step() call applied
+    HealthMonitor monitor_;
+    bool rebaseline_ = false; ///< a user action since the last step(): restart the monitor's energy balance
+    template <bool Parallel> void check_health();
     void apply_user_constraints() noexcept;
     /// Writes velocity `vel` (m/s) of particle i into s in the integrator's form: u, v, w = vel (symplectic Euler) or
     /// the previous position x - vel dt (Verlet).

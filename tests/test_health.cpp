@@ -1,0 +1,243 @@
+// Health monitor (core/include/drape/health_monitor.hpp): each trigger fires on a constructed explosion and not on
+// any built-in scene; the issue-10 blow-ups (strain limit, overlapping colliders, aero at the default dt) stay
+// healthy; the monitor's figures do not depend on the thread count.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include <tbb/global_control.h>
+
+#include "drape/colliders.hpp"
+#include "drape/scene.hpp"
+#include "test_helpers.hpp"
+
+using namespace drape;
+
+namespace {
+
+BuiltScene builtin(const std::string& name, std::uint32_t size) {
+    SceneSpec spec = load_scene(name);
+    if (spec.cloth == ClothType::grid)
+        spec.grid.n = size;
+    else
+        spec.tshirt.cells_per_metre = float(size);
+    return build_scene(spec);
+}
+
+Simulation make(BuiltScene s) { return Simulation(std::move(s.cloth), s.initial, s.params); }
+
+/// A writable copy of the simulation's state (what the monitor is handed).
+StateBuffer copy_state(const Simulation& sim) {
+    const StateBuffer& s = sim.state();
+    return StateBuffer{s.x, s.y, s.z, s.u, s.v, s.w};
+}
+
+// A hang at rest, 10,000 particles of 1e-5 kg: energy bound ~0.5 J, speed bound ~60 m/s (health_monitor.hpp).
+struct Calm {
+    Simulation sim;
+    HealthMonitor monitor;
+    Calm(float strain_limit = 0.0f) : sim(make_sim(strain_limit)) {
+        monitor.init(sim.cloth(), sim.params());
+        monitor.rebaseline<false>(sim.cloth(), sim.params(), sim.state(), 0);
+    }
+    static Simulation make_sim(float strain_limit) {
+        HangParams hp;
+        hp.n = 100;
+        SceneBuild scene = build_hang_scene(hp);
+        SimulationParams p = drape::testing::default_params(scene.cloth);
+        p.strain_limit.ratio = strain_limit;
+        return Simulation(std::move(scene.cloth), scene.initial, p);
+    }
+};
+
+} // namespace
+
+TEST(HealthMonitor, CalmStateIsHealthy) {
+    Calm c;
+    StateBuffer s = copy_state(c.sim);
+    EXPECT_EQ(c.monitor.check<false>(c.sim.cloth(), c.sim.params(), s, 32), "");
+    EXPECT_TRUE(c.monitor.figures().healthy);
+    EXPECT_GT(c.monitor.figures().energy_bound, 0.0);
+}
+
+TEST(HealthMonitor, EnergyTriggerFires) {
+    Calm c;
+    StateBuffer s = copy_state(c.sim);
+    for (std::size_t i = 0; i < c.sim.cloth().particle_count; ++i) s.v[i] = 20.0f; // 2 J on a 0.1 kg cloth at rest
+    const std::string msg = c.monitor.check<false>(c.sim.cloth(), c.sim.params(), s, 64);
+    EXPECT_NE(msg.find("kinetic energy"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("substep 64"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("likely cause"), std::string::npos) << msg;
+    EXPECT_FALSE(c.monitor.figures().healthy);
+    EXPECT_GT(c.monitor.figures().kinetic_energy, c.monitor.figures().energy_bound);
+}
+
+TEST(HealthMonitor, StrainTriggerFiresAndBlamesTheStrainLimit) {
+    Calm c(0.01f); // strain limit 1 %: the strain bound is 100 %
+    StateBuffer s = copy_state(c.sim);
+    const std::size_t i = 50 * 100 + 50; // a free particle in the middle, moved 3 rest lengths, at rest
+    s.x[i] += 3.0f * (1.0f / 99.0f);
+    const std::string msg = c.monitor.check<false>(c.sim.cloth(), c.sim.params(), s, 32);
+    EXPECT_NE(msg.find("max structural strain"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("strain limit"), std::string::npos) << msg;
+    EXPECT_EQ(c.monitor.figures().strain_bound, 1.0f);
+    EXPECT_GT(c.monitor.figures().max_strain, 1.0f);
+}
+
+TEST(HealthMonitor, SpeedTriggerFires) {
+    Calm c;
+    StateBuffer s = copy_state(c.sim);
+    s.w[5000] = 150.0f; // one 1e-5 kg particle: 0.11 J, under the energy bound, far above the speed bound
+    const std::string msg = c.monitor.check<false>(c.sim.cloth(), c.sim.params(), s, 32);
+    EXPECT_NE(msg.find("max particle speed"), std::string::npos) << msg;
+    EXPECT_LE(c.monitor.figures().kinetic_energy, c.monitor.figures().energy_bound);
+    EXPECT_GT(c.monitor.figures().max_speed, c.monitor.figures().speed_bound);
+}
+
+TEST(HealthMonitor, StepThrowsBlowUpErrorAndRestoresTheLastHealthyCheck) {
+    HangParams hp;
+    hp.n = 30;
+    SceneBuild scene = build_hang_scene(hp);
+    Simulation sim(std::move(scene.cloth), scene.initial, drape::testing::default_params(scene.cloth));
+    sim.step(2 * HealthMonitor::check_every);
+    const std::uint64_t healthy = sim.checksum();
+    const std::size_t at = sim.steps_done();
+    // An explosion from outside the physics: every particle kicked to 50 m/s (Euler keeps velocities in u, v, w).
+    StateBuffer& s = const_cast<StateBuffer&>(sim.state());
+    for (std::size_t i = 0; i < sim.cloth().particle_count; ++i)
+        if (!sim.is_pinned(i)) s.u[i] = 50.0f;
+    try {
+        sim.step(HealthMonitor::check_every);
+        FAIL() << "no BlowUpError";
+    } catch (const BlowUpError& e) {
+        std::printf("%s\n", e.what());
+        EXPECT_NE(std::string(e.what()).find("substep " + std::to_string(at + HealthMonitor::check_every)),
+                  std::string::npos)
+            << e.what();
+    }
+    EXPECT_EQ(sim.steps_done(), at);
+    EXPECT_EQ(sim.checksum(), healthy);
+    EXPECT_FALSE(sim.health().monitor.healthy);
+    EXPECT_TRUE(sim.health().finite);
+}
+
+// Every built-in scene over 5 simulated seconds, at small sizes (the default sizes take minutes for 5 s; the small
+// ones run every stage of the scene - strain limit, colliders, seams, aero, wind - in about 4 s in all, Release).
+class BuiltInScene : public ::testing::TestWithParam<std::pair<const char*, std::uint32_t>> {};
+
+TEST_P(BuiltInScene, StaysHealthyForFiveSeconds) {
+    const auto [name, size] = GetParam();
+    Simulation sim = make(builtin(name, size));
+    const auto steps = static_cast<std::size_t>(std::ceil(5.0 / sim.params().dt));
+    ASSERT_NO_THROW(sim.step(steps)) << name;
+    const Health h = sim.health();
+    EXPECT_TRUE(h.monitor.healthy) << name;
+    EXPECT_GT(h.monitor.substep, steps - HealthMonitor::check_every) << name;
+    // The margins the bounds keep on a legitimate scene (measured: >= 10x on energy, >= 10x on speed).
+    EXPECT_LT(h.monitor.kinetic_energy, 0.5 * h.monitor.energy_bound) << name;
+    EXPECT_LT(h.monitor.max_speed, 0.5f * h.monitor.speed_bound) << name;
+    EXPECT_LT(h.monitor.max_strain, 0.5f * h.monitor.strain_bound) << name;
+    if (sim.params().strain_limit.ratio > 0.0f)
+        EXPECT_LE(h.max_limited_stretch, 1.1f * sim.params().strain_limit.ratio) << name;
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, BuiltInScene,
+                         ::testing::Values(std::pair{"hang", 12u}, std::pair{"drape", 16u}, std::pair{"sphere", 16u},
+                                           std::pair{"flag", 12u}, std::pair{"tshirt", 12u}),
+                         [](const auto& info) { return std::string(info.param.first); });
+
+// Issue 10: --size 32 --stiffness 100 --strain-limit 0.01 --sim-seconds 0.5 ended at strain 18.8 and 3,493 J.
+TEST(StrainLimitHealth, TightLimitOnSoftClothHoldsWithoutEnergy) {
+    SceneSpec spec = load_scene("hang");
+    spec.grid.n = 32;
+    spec.stiffness = 100.0f;
+    spec.physics.strain_limit.ratio = 0.01f;
+    BuiltScene b = build_scene(spec);
+    Simulation sim = make(std::move(b));
+    const auto steps = static_cast<std::size_t>(std::ceil(0.5 / sim.params().dt));
+    ASSERT_NO_THROW(sim.step(steps));
+    const Health h = sim.health();
+    EXPECT_TRUE(h.monitor.healthy);
+    EXPECT_LE(h.max_limited_stretch, 0.011f);
+    // 0.1 kg falling at most the cloth's 1 m: under 1 J (it was 3,493 J).
+    EXPECT_LT(h.kinetic_energy, 1.0);
+}
+
+// Issue 10: a cloth starting inside two overlapping thick spheres, no damping, no drag, gained energy without bound.
+TEST(CollideHealth, OverlappingThickCollidersDoNotPumpEnergy) {
+    const std::string json = R"({ "cloth": {"type": "grid", "n": 20, "size": 1.0, "plane": "horizontal",
+        "centre": [0, 0, 0], "pins": "none"}, "material": {"damping_ratio": 0}, "physics": {"drag": 0},
+        "colliders": [ {"type": "sphere", "centre": [-0.1, 0, 0], "radius": 0.2, "thickness": 0.1, "friction": 0},
+                       {"type": "sphere", "centre": [0.1, 0, 0], "radius": 0.2, "thickness": 0.1, "friction": 0} ] })";
+    Simulation sim = make(build_scene(parse_scene(json, "overlap.json")));
+    // The outer part falls at most 0.5 m (0.1 kg: 0.49 J); the part inside the spheres is held there.
+    double worst = 0.0;
+    const auto steps = static_cast<std::size_t>(std::ceil(0.25 / sim.params().dt));
+    for (int k = 0; k < 8; ++k) { // 2 s
+        ASSERT_NO_THROW(sim.step(steps));
+        worst = std::max(worst, sim.health().kinetic_energy);
+    }
+    EXPECT_LT(worst, 0.49);
+    EXPECT_TRUE(sim.health().monitor.healthy);
+}
+
+// Issue 10: density 100, C_d 10, 100 m/s went non-finite at substep 4 at the default dt, which ignored the aero drag.
+TEST(AeroHealth, DefaultDtAccountsForAeroDrag) {
+    const std::string json = R"({ "cloth": {"type": "grid", "n": 32, "plane": "vertical", "pins": "left_edge"},
+        "material": {"stiffness": 25000},
+        "physics": {"aero": {"enabled": true, "density": 100, "drag_coefficient": 10, "velocity": [0, 0, 100]}} })";
+    BuiltScene b = build_scene(parse_scene(json, "aero.json"));
+    const double without = stability_bound(b.cloth, b.params.air_drag).dt_max;
+    const StabilityBound with = stability_bound(b.cloth, b.params);
+    EXPECT_GT(with.aero_gamma_max, 0.0);
+    EXPECT_LT(with.dt_max, 0.1 * without);
+    EXPECT_LE(double(b.params.dt), with.dt_max);
+    Simulation sim = make(std::move(b));
+    ASSERT_NO_THROW(sim.step(2000)); // 3.4 ms: the cloth is blown to the wind's speed (~500 J) and stays finite
+    EXPECT_TRUE(sim.health().finite);
+    EXPECT_GT(sim.health().kinetic_energy, 100.0);
+    // A dt above the bound with aero is refused, as any dt above the bound.
+    SimulationParams p = sim.params();
+    p.dt = static_cast<float>(1.5 * with.dt_max);
+    EXPECT_THROW(sim.set_params(p), InvalidInput);
+}
+
+TEST(HealthMonitor, FiguresDoNotDependOnTheThreadCountOrTheSerialTwin) {
+    auto run = [](int threads, bool serial) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+        Simulation sim = make(builtin("drape", 40));
+        for (int k = 0; k < 5; ++k) serial ? sim.step_serial(64) : sim.step(64);
+        return sim.health().monitor;
+    };
+    const HealthFigures one = run(1, false);
+    for (auto [threads, serial] : {std::pair{3, false}, std::pair{2, true}}) {
+        const HealthFigures f = run(threads, serial);
+        EXPECT_EQ(f.substep, one.substep);
+        EXPECT_EQ(f.kinetic_energy, one.kinetic_energy);
+        EXPECT_EQ(f.energy_bound, one.energy_bound);
+        EXPECT_EQ(f.max_strain, one.max_strain);
+        EXPECT_EQ(f.max_speed, one.max_speed);
+        EXPECT_EQ(f.speed_bound, one.speed_bound);
+    }
+}
+
+// The collide stage's hold (colliders.hpp): a point that started the substep inside the collider it is found in is put
+// back at its start, at rest, instead of being projected across the solid; without the start positions it is projected.
+TEST(CollideHealth, PointThatStartedInsideIsHeldNotTeleported) {
+    const std::vector<Collider> slab = {make_plane({0.0f, 0.1f, 0.0f}, {0.0f, 1.0f, 0.0f}, {0.0f, 0.0f}),
+                                        make_plane({0.0f, -0.1f, 0.0f}, {0.0f, -1.0f, 0.0f}, {0.0f, 0.0f})};
+    // Every point is inside one of the two half-spaces: their projections disagree forever.
+    const float start_x = 0.0f, start_y = 0.0f, start_z = 0.0f, w = 1.0f;
+    float x = 0.0f, y = 0.02f, z = 0.0f, vx = 1.0f, vy = 2.0f, vz = 0.0f;
+    collide_range(slab, &x, &y, &z, &vx, &vy, &vz, &w, 0, 1, &start_x, &start_y, &start_z);
+    EXPECT_EQ(y, 0.0f);
+    EXPECT_EQ(vx, 0.0f);
+    EXPECT_EQ(vy, 0.0f);
+    float x2 = 0.0f, y2 = 0.02f, z2 = 0.0f, vx2 = 1.0f, vy2 = 2.0f, vz2 = 0.0f;
+    collide_range(slab, &x2, &y2, &z2, &vx2, &vy2, &vz2, &w, 0, 1);
+    EXPECT_NE(y2, 0.02f) << "without start positions the point is projected";
+    // Speed never grows either way: the response only removes velocity.
+    EXPECT_LE(vx2 * vx2 + vy2 * vy2 + vz2 * vz2, 1.0f + 4.0f);
+}
