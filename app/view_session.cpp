@@ -51,6 +51,13 @@ SceneSpec sized_spec(SceneSpec spec, std::uint32_t size) {
     return spec;
 }
 
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+} // namespace
+
 std::string grouped(std::size_t n) {
     const std::string digits = std::to_string(n);
     std::string out;
@@ -60,12 +67,6 @@ std::string grouped(std::size_t n) {
     }
     return out;
 }
-
-double seconds_since(std::chrono::steady_clock::time_point t) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
-} // namespace
 
 int ViewSession::hardware_threads() {
     return std::max(1, Workers::hardware());
@@ -641,6 +642,21 @@ void ViewSession::set_size(std::uint32_t n) {
     request(std::move(r));
 }
 
+void ViewSession::restore_run_state(const SimulationParams& old_params,
+                                    const std::array<SpringMaterial, spring_kind_count>& old_materials) {
+    // The smaller dt first, so that every intermediate state is stable.
+    try {
+        SimulationParams safe = sim_->params();
+        safe.dt = std::min(safe.dt, old_params.dt);
+        sim_->set_params(safe);
+        for (std::size_t k = 0; k < spring_kind_count; ++k)
+            sim_->set_material(static_cast<SpringKind>(k), old_materials[k]);
+        sim_->set_params(old_params);
+    } catch (const InvalidInput&) {
+        // Cannot happen (the old state was stable); the smaller dt then stays, which is stable too.
+    }
+}
+
 bool ViewSession::apply_physics(const Candidate& next, const std::string& what, const std::string& key) {
     if (busy(what)) return false;
     const Snapshot before = snapshot();
@@ -685,16 +701,7 @@ bool ViewSession::apply_physics(const Candidate& next, const std::string& what, 
         sim_->set_params(p);
     } catch (const InvalidInput& e) {
         // The probe bound and the core's disagree in the last bits: restore everything and say so.
-        try {
-            SimulationParams safe = sim_->params();
-            safe.dt = std::min(safe.dt, old_params.dt);
-            sim_->set_params(safe);
-            for (std::size_t k = 0; k < spring_kind_count; ++k)
-                sim_->set_material(static_cast<SpringKind>(k), old_materials[k]);
-            sim_->set_params(old_params);
-        } catch (const InvalidInput&) {
-            // Cannot happen (the old state was stable); the smaller dt then stays, which is stable too.
-        }
+        restore_run_state(old_params, old_materials);
         post(MessageLevel::warning, "refused: " + what + ": " + e.what());
         return false;
     }
@@ -950,16 +957,7 @@ void ViewSession::apply_settings(const Snapshot& target, History history) {
         sim_->set_params(q);
         sim_->set_params(target.params);
     } catch (const InvalidInput& e) {
-        try {
-            SimulationParams safe = sim_->params();
-            safe.dt = std::min(safe.dt, old_params.dt);
-            sim_->set_params(safe);
-            for (std::size_t k = 0; k < spring_kind_count; ++k)
-                sim_->set_material(static_cast<SpringKind>(k), old_materials[k]);
-            sim_->set_params(old_params);
-        } catch (const InvalidInput&) {
-            // The old state was stable; a smaller dt that stays is stable too.
-        }
+        restore_run_state(old_params, old_materials);
         post(MessageLevel::warning, std::string("refused: ") + verb + ": " + e.what());
         return;
     }

@@ -97,6 +97,9 @@ struct Confirmation {
     std::size_t available = 0; ///< bytes available now (SIZE_MAX: unknown)
 };
 
+/// Thousands separators for counts: 1,000,000.
+std::string grouped(std::size_t n);
+
 class ViewSession {
   public:
     /// Loads a built-in scene by name or a scene file (.json) and builds it. size: particles per side of a
@@ -252,6 +255,9 @@ class ViewSession {
     };
     static std::array<SpringMaterial, spring_kind_count> materials(const FabricSettings& f);
     double bound_for(const FabricSettings& f, float air_drag, const AeroWind& aero) const;
+    /// After a refused change: the old run parameters and materials back, through stable intermediate states.
+    void restore_run_state(const SimulationParams& old_params,
+                           const std::array<SpringMaterial, spring_kind_count>& old_materials);
     int auto_substep_count(double dt) const;
     /// Manual substeps: enough substeps of dt to cover frame_time_ (may exceed view_max_substeps: callers
     /// refuse).

@@ -96,16 +96,6 @@ bool edit_int(const char* label, int current, int lo, int hi, const char* format
     return ImGui::IsItemDeactivatedAfterEdit() && *buffer != current;
 }
 
-/// Thousands separators for counts.
-std::string grouped(std::size_t n) {
-    const std::string digits = std::to_string(n);
-    std::string out;
-    for (std::size_t i = 0; i < digits.size(); ++i) {
-        if (i > 0 && (digits.size() - i) % 3 == 0) out.push_back(',');
-        out.push_back(digits[i]);
-    }
-    return out;
-}
 
 } // namespace
 

@@ -90,4 +90,28 @@ void apply_materials(Cloth& cloth, const std::array<SpringMaterial, spring_kind_
     }
 }
 
+std::optional<GridStructuralRest> uniform_grid_structural(const Cloth& cloth) {
+    if (!cloth.grid || cloth.grid->columns == 0 ||
+        std::size_t{cloth.grid->columns} * cloth.grid->rows != cloth.particle_count)
+        return std::nullopt;
+    const std::size_t columns = cloth.grid->columns, rows = cloth.grid->rows;
+    GridStructuralRest rest;
+    std::size_t east = 0, south = 0;
+    for (const Edge& e : cloth.edges) {
+        if (e.kind != SpringKind::structural) continue;
+        const std::size_t a = std::min(e.a, e.b), b = std::max(e.a, e.b);
+        if (b == a + 1 && a % columns + 1 < columns) {
+            if (east++ == 0) rest.east = e.rest;
+            if (e.rest != rest.east) return std::nullopt;
+        } else if (b == a + columns) {
+            if (south++ == 0) rest.south = e.rest;
+            if (e.rest != rest.south) return std::nullopt;
+        } else {
+            return std::nullopt;
+        }
+    }
+    if (east != rows * (columns - 1) || south != columns * (rows - 1)) return std::nullopt;
+    return rest;
+}
+
 } // namespace drape

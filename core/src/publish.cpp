@@ -136,23 +136,12 @@ Publisher::Publisher(const Cloth& cloth)
                 grid_mask_[j * grid_columns_ + i] = grid_vertex_mask(i, j, grid_columns_, grid_rows_);
         // The fused strain figure covers the structural springs only if they are exactly the grid's east and
         // south neighbours, each direction with one rest length.
-        std::size_t east = 0, south = 0;
-        bool uniform = true;
-        for (const Edge& e : cloth.edges) {
-            if (e.kind != SpringKind::structural) continue;
-            const std::size_t a = std::min(e.a, e.b), b = std::max(e.a, e.b);
-            if (b == a + 1 && a % grid_columns_ + 1 < grid_columns_) {
-                if (east++ == 0) rest_east_ = e.rest;
-                uniform = uniform && e.rest == rest_east_;
-            } else if (b == a + grid_columns_) {
-                if (south++ == 0) rest_south_ = e.rest;
-                uniform = uniform && e.rest == rest_south_;
-            } else {
-                uniform = false;
-            }
+        const std::optional<GridStructuralRest> rest = uniform_grid_structural(cloth);
+        grid_strain_ = rest.has_value();
+        if (rest) {
+            rest_east_ = rest->east;
+            rest_south_ = rest->south;
         }
-        grid_strain_ =
-            uniform && east == grid_rows_ * (grid_columns_ - 1) && south == grid_columns_ * (grid_rows_ - 1);
     } else {
         // General path: per vertex, the (next, previous) pairs of its triangles, in triangle order.
         fan_offsets_.assign(n + 1, 0);

@@ -65,37 +65,22 @@ StrainField::StrainField(const Cloth& cloth)
     const std::size_t n = particle_count_;
     // Grid path when every structural spring is an east or south grid neighbour, each direction with one
     // rest length, and every such neighbour pair has its spring.
-    if (cloth.grid && cloth.grid->columns > 0 && std::size_t{cloth.grid->columns} * cloth.grid->rows == n) {
+    if (const std::optional<GridStructuralRest> rest = uniform_grid_structural(cloth)) {
         const std::size_t columns = cloth.grid->columns, rows = cloth.grid->rows;
-        std::size_t east = 0, south = 0;
-        bool uniform = true;
-        for (const Edge& e : cloth.edges) {
-            if (e.kind != SpringKind::structural) continue;
-            const std::size_t a = std::min(e.a, e.b), b = std::max(e.a, e.b);
-            if (b == a + 1 && a % columns + 1 < columns) {
-                if (east++ == 0) rest_east_ = e.rest;
-                uniform = uniform && e.rest == rest_east_;
-            } else if (b == a + columns) {
-                if (south++ == 0) rest_south_ = e.rest;
-                uniform = uniform && e.rest == rest_south_;
-            } else {
-                uniform = false;
+        rest_east_ = rest->east;
+        rest_south_ = rest->south;
+        columns_ = columns;
+        grid_mask_.reset(plane_floats_);
+        for (std::size_t k = 0; k < plane_floats_; ++k) {
+            std::uint32_t m = 0;
+            if (k < n) {
+                const std::size_t i = k % columns, j = k / columns;
+                if (i + 1 < columns) m |= east_bit;
+                if (i >= 1) m |= west_bit;
+                if (j + 1 < rows) m |= south_bit;
+                if (j >= 1) m |= north_bit;
             }
-        }
-        if (uniform && east == rows * (columns - 1) && south == columns * (rows - 1)) {
-            columns_ = columns;
-            grid_mask_.reset(plane_floats_);
-            for (std::size_t k = 0; k < plane_floats_; ++k) {
-                std::uint32_t m = 0;
-                if (k < n) {
-                    const std::size_t i = k % columns, j = k / columns;
-                    if (i + 1 < columns) m |= east_bit;
-                    if (i >= 1) m |= west_bit;
-                    if (j + 1 < rows) m |= south_bit;
-                    if (j >= 1) m |= north_bit;
-                }
-                grid_mask_[k] = m;
-            }
+            grid_mask_[k] = m;
         }
     }
     if (!grid_path()) {

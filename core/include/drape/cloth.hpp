@@ -101,4 +101,12 @@ Cloth cook_cloth(std::span<const float> inv_mass, std::vector<Edge> edges,
 /// Re-fills every per-entry stiffness and damping from `material` (after the user changes a material).
 void apply_materials(Cloth& cloth, const std::array<SpringMaterial, spring_kind_count>& material);
 
+/// Rest lengths of a grid cloth's structural springs when they are exactly the grid's east and south neighbours
+/// (every neighbour pair has its spring, no other structural spring), each direction with one rest length: the
+/// case the SIMD strain figures (publish, strain colours) handle with contiguous loads. Empty otherwise.
+struct GridStructuralRest {
+    float east = 0.0f, south = 0.0f; ///< m
+};
+std::optional<GridStructuralRest> uniform_grid_structural(const Cloth& cloth);
+
 } // namespace drape
