@@ -5,10 +5,10 @@
 #include <limits>
 #include <sstream>
 
-#include <tbb/parallel_for.h>
 
 #include "drape/simulation.hpp"
 #include "drape/stability.hpp"
+#include "for_each_index.hpp"
 
 namespace drape {
 
@@ -25,13 +25,6 @@ double aero_speed(const SimulationParams& p) {
     if (!p.aero.enabled) return 0.0;
     const auto& w = p.aero.velocity;
     return std::sqrt(double(w[0]) * w[0] + double(w[1]) * w[1] + double(w[2]) * w[2]);
-}
-
-template <bool Parallel, class F> void for_each_index(std::size_t count, F&& f) {
-    if constexpr (Parallel)
-        tbb::parallel_for(std::size_t{0}, count, f);
-    else
-        for (std::size_t k = 0; k < count; ++k) f(k);
 }
 
 } // namespace

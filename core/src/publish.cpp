@@ -7,11 +7,10 @@
 #include <cmath>
 #include <string>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include "drape/errors.hpp"
 #include "drape/simd.hpp"
+#include "for_each_index.hpp"
 
 namespace drape {
 
@@ -198,24 +197,8 @@ PublishStats Publisher::publish_impl(std::span<const float> x, std::span<const f
         else
             block_general(b, p, o);
     };
-    if constexpr (Parallel) {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, block_count_, 1),
-                          [&](const tbb::blocked_range<std::size_t>& r) {
-                              for (std::size_t b = r.begin(); b != r.end(); ++b)
-                                  run_block(b);
-                          });
-        if (strain_chunk_count_ > 0)
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, strain_chunk_count_, 1),
-                              [&](const tbb::blocked_range<std::size_t>& r) {
-                                  for (std::size_t c = r.begin(); c != r.end(); ++c)
-                                      strain_chunk(c, p);
-                              });
-    } else {
-        for (std::size_t b = 0; b < block_count_; ++b)
-            run_block(b);
-        for (std::size_t c = 0; c < strain_chunk_count_; ++c)
-            strain_chunk(c, p);
-    }
+    for_each_index<Parallel>(block_count_, run_block);
+    for_each_index<Parallel>(strain_chunk_count_, [&](std::size_t c) { strain_chunk(c, p); });
     // The padding after the last block (only when there are no particles at all).
     for (std::size_t k = block_count_ * block_particles; k < plane_floats_; ++k)
         for (std::size_t plane = 0; plane < vertex_plane_count; ++plane)

@@ -6,11 +6,10 @@
 #include <cstring>
 #include <string>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include "drape/errors.hpp"
 #include "drape/simd.hpp"
+#include "for_each_index.hpp"
 
 namespace drape {
 
@@ -159,16 +158,7 @@ float StrainField::compute_impl(std::span<const float> x, std::span<const float>
         else
             block_general(b, p, o);
     };
-    if constexpr (Parallel) {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, block_count_, 1),
-                          [&](const tbb::blocked_range<std::size_t>& r) {
-                              for (std::size_t b = r.begin(); b != r.end(); ++b)
-                                  run_block(b);
-                          });
-    } else {
-        for (std::size_t b = 0; b < block_count_; ++b)
-            run_block(b);
-    }
+    for_each_index<Parallel>(block_count_, run_block);
     float result = 0.0f;
     std::fill(histogram_.begin(), histogram_.end(), 0u);
     for (std::size_t b = 0; b < block_count_; ++b) {
