@@ -5,7 +5,6 @@
 #include <limits>
 #include <sstream>
 
-
 #include "drape/simulation.hpp"
 #include "drape/stability.hpp"
 #include "for_each_index.hpp"

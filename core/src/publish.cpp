@@ -7,7 +7,6 @@
 #include <cmath>
 #include <string>
 
-
 #include "drape/errors.hpp"
 #include "drape/simd.hpp"
 #include "for_each_index.hpp"

@@ -6,7 +6,6 @@
 #include <cstring>
 #include <string>
 
-
 #include "drape/errors.hpp"
 #include "drape/simd.hpp"
 #include "for_each_index.hpp"
