@@ -264,23 +264,23 @@ class ViewSession {
     int manual_substep_count(double dt) const;
     /// Applies a change of fabric, drag or aero with the stability rules above; returns false if refused.
     bool apply_physics(const Candidate& next, const std::string& what, const std::string& key);
-    struct Snapshot {
-        std::uint32_t size;
+    struct Snapshot { // every member initialised: a Request copies a Snapshot that settings_for() filled in part
+        std::uint32_t size = 0;
         SceneSpec spec;
-        float total_mass;
+        float total_mass = 0.0f;
         FabricSettings fabric;
-        bool has_seams;
-        float cloth_size;
-        std::array<float, 3> frame_lo, frame_hi;
+        bool has_seams = false;
+        float cloth_size = 0.0f;
+        std::array<float, 3> frame_lo{}, frame_hi{};
         std::optional<float> ground;
         SimulationParams params;
-        bool auto_dt;
-        double dt_bound;
-        int substeps;
-        float spacing;
-        double frame_time;
-        bool auto_substeps;
-        std::uint64_t topology; ///< changes with the scene or the resolution (a rebuild from the start)
+        bool auto_dt = true;
+        double dt_bound = 0.0;
+        int substeps = 10;
+        float spacing = 0.0f;
+        double frame_time = 0.0;
+        bool auto_substeps = true;
+        std::uint64_t topology = 0; ///< changes with the scene or the resolution (a rebuild from the start)
     };
     Snapshot snapshot() const;
     void restore(const Snapshot& before);
