@@ -32,7 +32,7 @@ if [ "$asan" = 1 ]; then
     cmake --build --preset asan -j "$jobs"
     # tests/lsan.supp: allocations made inside the UBSan runtime itself (per-thread data of threads alive at exit).
     ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1} \
-    LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/tests/lsan.supp} \
+    LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/tests/lsan.supp:print_suppressions=0} \
     UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1} \
         ctest --preset asan -j "$jobs"
 fi

@@ -297,7 +297,13 @@ def main():
         shutil.copy(shot, os.path.join(args.keep, "viewer_smoke.png"))
     shutil.rmtree(tmp, ignore_errors=True)
 
-    # Input, driven by xdotool on the real window.
+    # Input, driven by xdotool on the real window. Not under AddressSanitizer: an instrumented viewer draws a frame in
+    # seconds, so xdotool's presses and drags land between frames and the checks measure timing, not the input logic
+    # (the Release run of this test checks it).
+    ldd = subprocess.run(["ldd", args.drape], capture_output=True, text=True)
+    if "libasan" in ldd.stdout:
+        print("skip: the xdotool input checks (an ASan build is too slow for real-time input; checked in Release)")
+        return 0
     if not shutil.which("xdotool"):
         print("FAIL: xdotool not found; scripts/setup.sh installs it (Debian package 'xdotool')")
         return 1
