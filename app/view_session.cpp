@@ -447,6 +447,12 @@ bool ViewSession::commit_params(const SimulationParams& p, const std::string& ke
     if (busy(key)) return false;
     // set_params leaves the simulation as it was when it refuses, so no snapshot is needed.
     const Snapshot before = snapshot();
+    if (!try_set_params(p)) return false;
+    record(before, key);
+    return true;
+}
+
+bool ViewSession::try_set_params(const SimulationParams& p) {
     try {
         sim_->set_params(p);
     } catch (const InvalidInput& e) {
@@ -454,7 +460,6 @@ bool ViewSession::commit_params(const SimulationParams& p, const std::string& ke
         return false;
     }
     params_ = p;
-    record(before, key);
     return true;
 }
 
@@ -838,13 +843,7 @@ bool ViewSession::apply_dt(double dt) {
     SimulationParams p = sim_->params();
     p.dt = static_cast<float>(dt);
     if (double(p.dt) > top) p.dt = std::nextafter(p.dt, 0.0f);
-    try {
-        sim_->set_params(p);
-    } catch (const InvalidInput& e) {
-        post(MessageLevel::warning, std::string("refused: ") + e.what());
-        return false;
-    }
-    params_ = p;
+    if (!try_set_params(p)) return false;
     if (auto_substeps_)
         substeps_ = auto_substep_count(dt);
     else

@@ -287,6 +287,8 @@ class ViewSession {
     /// Applies run parameters to the simulation and keeps them; a refused change (unstable, out of range) posts a
     /// message and changes nothing. Returns whether it was applied; records an undo entry under `key`.
     bool commit_params(const SimulationParams& p, const std::string& key);
+    /// Sets the simulation's run parameters and keeps them (params_); a refusal is posted. No undo entry.
+    bool try_set_params(const SimulationParams& p);
     void refresh_pins();
     /// The settings of a scene as loaded, at `size` (throws InvalidInput for a size out of range).
     Snapshot settings_for(SceneSpec spec, std::optional<std::uint32_t> size);
