@@ -139,8 +139,9 @@ TEST_P(BuiltInScene, StaysHealthyForFiveSeconds) {
     EXPECT_LT(h.monitor.kinetic_energy, 0.5 * h.monitor.energy_bound) << name;
     EXPECT_LT(h.monitor.max_speed, 0.5f * h.monitor.speed_bound) << name;
     EXPECT_LT(h.monitor.max_strain, 0.5f * h.monitor.strain_bound) << name;
-    if (sim.params().strain_limit.ratio > 0.0f)
+    if (sim.params().strain_limit.ratio > 0.0f) {
         EXPECT_LE(h.max_limited_stretch, 1.1f * sim.params().strain_limit.ratio) << name;
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, BuiltInScene,
