@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "drape/cloth.hpp"
+#include "drape/fabric.hpp"
 
 namespace drape {
 
@@ -33,7 +34,14 @@ struct HangParams {
     /// Spring damping as a fraction of critical damping of one spring between two particles (0..1):
     /// kd = ratio * 2 sqrt(k m / 2). Keeps the damping meaningful at any resolution.
     float damping_ratio = 0.05f;
+    /// Material model: MaterialModel::fabric derives everything from `fabric` (physical units, docs/fabric.md) and
+    /// ignores total_mass, stiffness and the ratios above; MaterialModel::springs is the seeds' spring model.
+    MaterialModel model = MaterialModel::springs;
+    Fabric fabric;
     GridPins pins = GridPins::corners;
+    /// Physical pin size, m: each pin holds every particle within this distance of its point (a clip of this
+    /// radius; at least the nearest particle), so the strain next to a pin converges with resolution. 0 = one particle.
+    float pin_radius = 0.0f;
     GridPlane plane = GridPlane::horizontal;
     /// m, centre of the cloth: the frame's origin (Cloth::origin), positions are stored relative to it
     std::array<float, 3> centre{0.0f, 0.0f, 0.0f};
