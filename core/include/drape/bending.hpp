@@ -24,4 +24,14 @@ struct BendElement {
     float weight = 0.0f; ///< w_e, N/m (energy = 1/2 w_e |q_e|^2, q_e in m)
 };
 
+struct Cloth;
+
+/// Cooks bending elements into the cloth (Cloth::bending, replacing any): keeps the element list, assembles Q for
+/// the kernels; `damping` is Rayleigh beta, s. Throws InvalidInput on an index out of range or a negative weight.
+void set_bending(Cloth& cloth, std::vector<BendElement> elements, float damping);
+
+/// E = 1/2 sum_e w_e |q_e|^2 (J) at positions x, y, z (one entry per particle), in double: the reference.
+double bending_energy(std::span<const BendElement> elements, std::span<const float> x, std::span<const float> y,
+                      std::span<const float> z);
+
 } // namespace drape
