@@ -82,10 +82,10 @@ State read_state(const Simulation& sim) {
     const StateBuffer& b = sim.state();
     const double inv_dt = 1.0 / double(sim.params().dt);
     for (std::size_t i = 0; i < n; ++i) {
-        if (sim.params().integrator == Integrator::verlet) { // exact velocity implied by the stored x and x_prev
-            s.vx[i] = (double(b.x[i]) - double(b.u[i])) * inv_dt;
-            s.vy[i] = (double(b.y[i]) - double(b.v[i])) * inv_dt;
-            s.vz[i] = (double(b.z[i]) - double(b.w[i])) * inv_dt;
+        if (sim.params().integrator == Integrator::verlet) { // velocity from the stored displacement x - x_prev
+            s.vx[i] = double(b.u[i]) * inv_dt;
+            s.vy[i] = double(b.v[i]) * inv_dt;
+            s.vz[i] = double(b.w[i]) * inv_dt;
         } else {
             s.vx[i] = b.u[i];
             s.vy[i] = b.v[i];

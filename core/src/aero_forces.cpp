@@ -42,9 +42,9 @@ template <bool Parallel> void Simulation::aero_forces_stage() {
     const float half_rho_cd = 0.5f * aero.density * aero.drag_coefficient;
     auto velocity = [&](std::uint32_t i, float out[3]) {
         if (verlet) {
-            out[0] = (s.x[i] - s.u[i]) * inv_dt;
-            out[1] = (s.y[i] - s.v[i]) * inv_dt;
-            out[2] = (s.z[i] - s.w[i]) * inv_dt;
+            out[0] = s.u[i] * inv_dt;
+            out[1] = s.v[i] * inv_dt;
+            out[2] = s.w[i] * inv_dt;
         } else {
             out[0] = s.u[i];
             out[1] = s.v[i];

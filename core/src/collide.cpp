@@ -1,9 +1,9 @@
 // Stage 6: collisions with analytic colliders (core/src/colliders.cpp has the geometry). Runs on the state just
 // written by integration and strain limiting, per fixed particle block, so no particle is left inside a collider at
 // the end of a substep (a point stuck between overlapping colliders whose projections disagree is held at its
-// position from the start of the substep, at rest: collide_range). Verlet stores x_prev, not v: the block's
-// velocities are made explicit in scratch, collided, and x_prev rewritten only where the collision changed
-// something (others keep their exact bits).
+// position from the start of the substep, at rest: collide_range). Verlet stores the displacement d = x - x_prev,
+// not v: the block's velocities d / dt are made explicit in scratch, collided, and d rewritten only where the
+// collision changed something (others keep their exact bits).
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -31,9 +31,9 @@ template <bool Parallel> void Simulation::collide_stage(StateBuffer& out) {
         float *vx = ax_.data(), *vy = ay_.data(), *vz = az_.data();
         float *px = fx_.data(), *py = fy_.data(), *pz = fz_.data();
         for (std::size_t i = begin; i < end; ++i) {
-            vx[i] = (out.x[i] - out.u[i]) * inv_dt;
-            vy[i] = (out.y[i] - out.v[i]) * inv_dt;
-            vz[i] = (out.z[i] - out.w[i]) * inv_dt;
+            vx[i] = out.u[i] * inv_dt;
+            vy[i] = out.v[i] * inv_dt;
+            vz[i] = out.w[i] * inv_dt;
             px[i] = out.x[i];
             py[i] = out.y[i];
             pz[i] = out.z[i];
@@ -42,9 +42,9 @@ template <bool Parallel> void Simulation::collide_stage(StateBuffer& out) {
                       end, hx, hy, hz);
         for (std::size_t i = begin; i < end; ++i) {
             if (out.x[i] == px[i] && out.y[i] == py[i] && out.z[i] == pz[i]) continue;
-            out.u[i] = out.x[i] - vx[i] * dt;
-            out.v[i] = out.y[i] - vy[i] * dt;
-            out.w[i] = out.z[i] - vz[i] * dt;
+            out.u[i] = vx[i] * dt;
+            out.v[i] = vy[i] * dt;
+            out.w[i] = vz[i] * dt;
         }
     };
     const std::size_t blocks = (n + block_particles - 1) / block_particles;

@@ -9,13 +9,13 @@
 
 namespace drape::kernels {
 
-/// Velocity of a batch: stored (Euler) or (x - x_prev) / dt (Verlet).
+/// Velocity of a batch: stored (Euler) or the displacement (x - x_prev) / dt (Verlet).
 template <Integrator I> DRAPE_INLINE Vec3b velocity(const StepContext& c, const SelfBatch& s) noexcept {
     if constexpr (I == Integrator::symplectic_euler) {
         return {s.u, s.v, s.w};
     } else {
         const fbatch inv_dt(c.inv_dt);
-        return {(s.x - s.u) * inv_dt, (s.y - s.v) * inv_dt, (s.z - s.w) * inv_dt};
+        return {s.u * inv_dt, s.v * inv_dt, s.w * inv_dt};
     }
 }
 

@@ -55,9 +55,9 @@ HealthMonitor::Reduced HealthMonitor::reduce(const Cloth& cloth, const Simulatio
         for (std::size_t i = begin; i < end; ++i) {
             const float w = cloth.inv_mass[i];
             const float m = w > 0.0f ? 1.0f / w : 0.0f; // pinned: no mass that moves
-            const float vx = verlet ? (s.x[i] - s.u[i]) * inv_dt : s.u[i];
-            const float vy = verlet ? (s.y[i] - s.v[i]) * inv_dt : s.v[i];
-            const float vz = verlet ? (s.z[i] - s.w[i]) * inv_dt : s.w[i];
+            const float vx = verlet ? s.u[i] * inv_dt : s.u[i];
+            const float vy = verlet ? s.v[i] * inv_dt : s.v[i];
+            const float vz = verlet ? s.w[i] * inv_dt : s.w[i];
             const float v2 = w > 0.0f ? vx * vx + vy * vy + vz * vz : 0.0f;
             speed2 = std::max(speed2, v2);
             if (!(v2 == v2)) speed2 = v2; // NaN propagates

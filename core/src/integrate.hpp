@@ -1,6 +1,9 @@
 // Stage 3: integration, then pins. a = f / m + a_ext for movable particles, 0 for pinned ones (inverse mass 0).
 //   symplectic Euler (001 eqs 9-10): v' = v + a dt, x' = x + v' dt
-//   position Verlet  (000 eq 1.12):  x' = 2x - x_prev + a dt^2, x_prev' = x   (no spurious 1/2)
+//   position Verlet  (000 eq 1.12):  x' = 2x - x_prev + a dt^2   (no spurious 1/2), stored as the displacement
+//                    d = x - x_prev: d' = d + a dt^2, x' = x + d'. The same numbers in exact arithmetic; in float32
+//                    d keeps its digits where x - x_prev (a difference of two nearby positions) lost them, so a cloth
+//                    at rest settles (x - x_prev of a 1 m cloth at rest was ~1e-7 m of rounding noise per step).
 // Writes the other state buffer and reports whether every value written is finite.
 #pragma once
 
@@ -28,13 +31,13 @@ DRAPE_INLINE fmask integrate_batch(const StepContext& c, std::size_t p, const Se
         ny = simd::select(movable, simd::fma(nv, dt, s.y), s.y);
         nz = simd::select(movable, simd::fma(nw, dt, s.z), s.z);
     } else {
-        const fbatch dt2(c.dt2);
-        nx = simd::select(movable, simd::fma(ax, dt2, (s.x - s.u) + s.x), s.x);
-        ny = simd::select(movable, simd::fma(ay, dt2, (s.y - s.v) + s.y), s.y);
-        nz = simd::select(movable, simd::fma(az, dt2, (s.z - s.w) + s.z), s.z);
-        nu = s.x; // a pinned particle gets x_prev = x: zero velocity
-        nv = s.y;
-        nw = s.z;
+        const fbatch dt2(c.dt2), zero(0.0f);
+        nu = simd::select(movable, simd::fma(ax, dt2, s.u), zero); // a pinned particle: displacement 0
+        nv = simd::select(movable, simd::fma(ay, dt2, s.v), zero);
+        nw = simd::select(movable, simd::fma(az, dt2, s.w), zero);
+        nx = simd::select(movable, s.x + nu, s.x);
+        ny = simd::select(movable, s.y + nv, s.y);
+        nz = simd::select(movable, s.z + nw, s.z);
     }
     simd::store(c.out_x + p, nx);
     simd::store(c.out_y + p, ny);

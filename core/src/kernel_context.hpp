@@ -23,7 +23,7 @@ struct Vec3b {
 /// One particle batch's own state, loaded once and shared by every stage of the fused pass.
 struct SelfBatch {
     fbatch x, y, z; ///< position, m
-    fbatch u, v, w; ///< velocity (symplectic Euler) or previous position (Verlet)
+    fbatch u, v, w; ///< velocity (symplectic Euler) or displacement over the last step, x - x_prev (Verlet)
 };
 
 struct StepContext {

@@ -34,10 +34,10 @@ template <bool Parallel> void Simulation::seam_forces_stage() {
             const float l2 = std::max(dx * dx + dy * dy + dz * dz, 1e-24f);
             const float inv = 1.0f / std::sqrt(l2);
             float dvx = st.u[b] - st.u[a], dvy = st.v[b] - st.v[a], dvz = st.w[b] - st.w[a];
-            if (verlet) { // u, v, w hold previous positions
-                dvx = (dx - dvx) * inv_dt;
-                dvy = (dy - dvy) * inv_dt;
-                dvz = (dz - dvz) * inv_dt;
+            if (verlet) { // u, v, w hold the displacement over the last step
+                dvx *= inv_dt;
+                dvy *= inv_dt;
+                dvz *= inv_dt;
             }
             const float c = m.stiffness * (1.0f - s.rest[k] * inv) +
                             m.damping * (dvx * dx + dvy * dy + dvz * dz) * inv * inv;

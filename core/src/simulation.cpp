@@ -131,10 +131,10 @@ void Simulation::store_velocity(StateBuffer& s, std::size_t i, std::array<float,
         s.u[i] = vel[0];
         s.v[i] = vel[1];
         s.w[i] = vel[2];
-    } else { // the previous position that gives this velocity
-        s.u[i] = s.x[i] - vel[0] * dt;
-        s.v[i] = s.y[i] - vel[1] * dt;
-        s.w[i] = s.z[i] - vel[2] * dt;
+    } else { // the displacement over one step that gives this velocity
+        s.u[i] = vel[0] * dt;
+        s.v[i] = vel[1] * dt;
+        s.w[i] = vel[2] * dt;
     }
 }
 
@@ -150,7 +150,7 @@ KernelPath Simulation::resolve_params(const SimulationParams& params) const {
 
 void Simulation::set_params(const SimulationParams& params) {
     const KernelPath kernel = resolve_params(params);
-    // A new integrator or dt changes what u, v, w mean (velocity or previous position): convert them.
+    // A new integrator or dt changes what u, v, w mean (velocity, or displacement per step): convert them.
     if (params.integrator != params_.integrator || params.dt != params_.dt) {
         for (std::size_t i = 0; i < cloth_.particle_count; ++i)
             store_velocity(cur(), i, velocity(i), params.integrator, params.dt);
@@ -229,7 +229,7 @@ std::array<float, 3> Simulation::velocity(std::size_t i) const noexcept {
     const StateBuffer& s = cur();
     if (params_.integrator == Integrator::symplectic_euler) return {s.u[i], s.v[i], s.w[i]};
     const float inv_dt = 1.0f / params_.dt;
-    return {(s.x[i] - s.u[i]) * inv_dt, (s.y[i] - s.v[i]) * inv_dt, (s.z[i] - s.w[i]) * inv_dt};
+    return {s.u[i] * inv_dt, s.v[i] * inv_dt, s.w[i] * inv_dt};
 }
 
 std::vector<std::string> Simulation::stage_names() const {

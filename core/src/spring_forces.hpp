@@ -4,8 +4,8 @@
 // For a spring from particle i to j with d = x_j - x_i, l = |d|, rest length l0, stiffness k, damping kd:
 //   Hooke (000 eq 1.4, 001 eq 1):   F_i = k (d - l0 d / l) = k (1 - l0 / l) d
 //   damping (001 eq 2, projected):  F_i = kd ((v_j - v_i) . d) d / l^2
-// so F_i = c d with c = k - k l0 / l + kd ((v_j - v_i) . d) / l^2. For Verlet the relative velocity is
-// ((d - (p_j - p_i)) / dt) . d = (l^2 - (p_j - p_i) . d) / dt, the 1/dt folded into kd.
+// so F_i = c d with c = k - k l0 / l + kd ((v_j - v_i) . d) / l^2. For Verlet u, v, w hold the displacement over
+// the last step, so the relative velocity is (u_j - u_i) / dt: the same dot product, the 1/dt folded into kd.
 // ~27 SIMD operations per spring end; a zero-length spring gives zero force (l^2 clamped, d = 0).
 #pragma once
 
@@ -29,12 +29,7 @@ DRAPE_INLINE fbatch spring_coefficient(const SelfBatch& s, fbatch xj, fbatch yj,
     const fbatch hooke = simd::fnma(krest, inv, k);
     const fbatch du = uj - s.u, dv = vj - s.v, dw = wj - s.w;
     const fbatch dot = simd::fma(dw, d.z, simd::fma(dv, d.y, du * d.x));
-    fbatch rel;
-    if constexpr (I == Integrator::symplectic_euler)
-        rel = dot;
-    else
-        rel = r2 - dot;
-    return simd::fma(kd * rel, inv * inv, hooke);
+    return simd::fma(kd * dot, inv * inv, hooke);
 }
 
 /// Regular-grid stencil: neighbours at fixed offsets, contiguous unaligned loads, a per-particle slot mask.

@@ -6,9 +6,8 @@
 //   d = x_b - x_a, l = |d|, e = (l - l_max) / (l (w_a + w_b)),  x_a += w_a e d,  x_b -= w_b e d.
 // Velocities follow the positions, so the integrator's state stays consistent and the correction cannot inject
 // energy: with K = 1 (Provot's after-each-step) symplectic Euler gets v = (x_corrected - x_old) / dt, i.e.
-// v += dx / dt, and Verlet keeps x_prev (its implied velocity (x - x_prev) / dt changes by dx / dt by itself). When
-// limiting runs after every K-th substep the excess built up over K dt, so Euler gets v += dx / (K dt) and Verlet
-// shifts x_prev by dx (1 - 1/K).
+// v += dx / dt, and Verlet's displacement d = x - x_prev (its velocity times dt) gets d += dx. When limiting runs
+// after every K-th substep the excess built up over K dt, so Euler gets v += dx / (K dt) and Verlet d += dx / K.
 // Why the weights must be the true inverse masses: the correction is then the mass-orthogonal projection onto the
 // constraint, whose impulse conserves momentum and only removes kinetic energy (a perfectly inelastic constraint). An
 // earlier version moved only the end farther from the pins (as if the inner end were infinitely heavy); that drags
@@ -56,8 +55,8 @@ struct LimitArgs {
     const float* __restrict rest;
     float stretch;     ///< 1 + ratio
     float tolerated;   ///< 1 + 1.05 ratio: a spring longer than this before its correction keeps the sweeps going
-    float vel_scale;   ///< Euler: 1 / (K dt), the velocity change per unit displacement; 0 for Verlet
-    float prev_scale;  ///< Verlet: 1 - 1/K, the x_prev shift per unit displacement; 0 for Euler
+    /// Change of u, v, w per unit displacement: Euler (velocity) 1 / (K dt), Verlet (displacement per step) 1 / K.
+    float vel_scale;
 };
 
 /// Returns whether a spring of [begin, end) was longer than the tolerated stretch before its correction.
@@ -83,16 +82,13 @@ bool limit_range(const LimitArgs& c, std::size_t begin, std::size_t end) noexcep
         c.x[ib] -= eb * dx;
         c.y[ib] -= eb * dy;
         c.z[ib] -= eb * dz;
-        const float s = c.vel_scale + c.prev_scale; // one of the two is 0
-        if (s != 0.0f) {
-            const float va = ea * s, vb = eb * s;
-            c.u[ia] += va * dx;
-            c.v[ia] += va * dy;
-            c.w[ia] += va * dz;
-            c.u[ib] -= vb * dx;
-            c.v[ib] -= vb * dy;
-            c.w[ib] -= vb * dz;
-        }
+        const float va = ea * c.vel_scale, vb = eb * c.vel_scale;
+        c.u[ia] += va * dx;
+        c.v[ia] += va * dy;
+        c.w[ia] += va * dz;
+        c.u[ib] -= vb * dx;
+        c.v[ib] -= vb * dy;
+        c.w[ib] -= vb * dz;
     }
     return over;
 }
@@ -176,11 +172,9 @@ template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, b
     if (sl.ratio <= 0.0f || limit_a_.empty() || (steps_done_ + 1) % sl.every != 0) return false;
     LimitArgs c{out.x.data(), out.y.data(), out.z.data(), out.u.data(), out.v.data(), out.w.data(),
                 cloth_.inv_mass.data(), limit_a_.data(), limit_b_.data(), limit_rest_.data(),
-                1.0f + sl.ratio, 1.0f + 1.05f * sl.ratio, 0.0f, 0.0f};
-    if (params_.integrator == Integrator::symplectic_euler)
-        c.vel_scale = 1.0f / (float(sl.every) * params_.dt);
-    else
-        c.prev_scale = 1.0f - 1.0f / float(sl.every);
+                1.0f + sl.ratio, 1.0f + 1.05f * sl.ratio,
+                params_.integrator == Integrator::symplectic_euler ? 1.0f / (float(sl.every) * params_.dt)
+                                                                   : 1.0f / float(sl.every)};
     // At least `passes` sweeps; more (up to strain_limit_max_passes) while a sweep still found a spring over
     // 1.05 x the limit, so a limit that can hold does (the JSON of `drape run` reports what was honoured).
     for (std::uint32_t pass = 0; pass < strain_limit_max_passes; ++pass) {
