@@ -25,7 +25,8 @@ Simulation soft_hang(std::uint32_t n, StrainLimit limit, Integrator integ = Inte
 TEST(StrainLimit, KeepsMaxStrainWithinTheLimitAtN100) {
     Simulation free_cloth = soft_hang(100, {0.0f, 1, 1});
     Simulation limited = soft_hang(100, {0.1f, 4, 1});
-    const std::size_t steps = static_cast<std::size_t>(1.0 / limited.params().dt);
+    // 0.4 s: the free cloth's first fall, where it overstretches most (measured: free 0.19 / 0.34 / 0.28 at t = 0.14 / 0.24 / 0.34 s, limited <= 0.1023).
+    const std::size_t steps = static_cast<std::size_t>(0.4 / limited.params().dt);
     float worst = 0.0f, worst_free = 0.0f;
     for (std::size_t done = 0; done < steps; done += 250) {
         limited.step(250);
