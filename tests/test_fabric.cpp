@@ -12,6 +12,7 @@
 #include "drape/scene_hang.hpp"
 #include "drape/scene_write.hpp"
 #include "drape/stability.hpp"
+#include "materials.hpp"
 
 using namespace drape;
 
@@ -320,4 +321,31 @@ TEST(PhysicalPins, ClipsStayAtTheirCorners) {
         }
     p.pin_radius = 1.5f;
     EXPECT_THROW((void)build_hang_scene(p), InvalidInput);
+}
+
+TEST(Fabric, DerivedValuesOfABuiltCloth) {
+    // What `drape run --json` and the viewer's Fabric panel show in the seeds' units: grams per particle and N/m
+    // per spring, read from the built cloth.
+    HangParams p;
+    p.n = 8;
+    p.total_mass = 0.064f; // 1 g per particle
+    p.stiffness = 2000.0f;
+    const SceneBuild b = build_hang_scene(p);
+    const app::DerivedMaterial d = app::derive_material(b.cloth);
+    EXPECT_NEAR(d.node_mass_g_mean, 1.0, 1e-5);
+    EXPECT_NEAR(d.node_mass_g_min, 1.0, 1e-5); // pinned corners count with their free mass
+    EXPECT_NEAR(d.node_mass_g_max, 1.0, 1e-5);
+    EXPECT_EQ(d.stiffness[0], 2000.0f);
+    EXPECT_EQ(d.spring_max[0], 2000.0f);
+    EXPECT_EQ(d.spring_min[0], 2000.0f);
+    EXPECT_EQ(d.spring_max[2], 200.0f); // bend 0.1 k
+    EXPECT_EQ(d.spring_max[3], 0.0f);   // no seams on a grid
+    EXPECT_EQ(d.spring_min[3], 0.0f);
+    SceneSpec spec = parse_scene(grid_scene(R"("wool")"), "t");
+    const nlohmann::ordered_json j = app::material_report(spec, b.cloth);
+    EXPECT_EQ(j["model"], "fabric");
+    EXPECT_EQ(j["fabric"]["name"], "wool");
+    EXPECT_NEAR(j["fabric"]["density_gsm"].get<double>(), 250.0, 1e-3);
+    EXPECT_NEAR(j["derived"]["node_mass_g"].get<double>(), 1.0, 1e-5);
+    EXPECT_EQ(j["derived"]["spring_k_max"]["structural"].get<float>(), 2000.0f);
 }
