@@ -42,6 +42,7 @@ void expect_same_spec(const SceneSpec& a, const SceneSpec& b, const std::string&
         EXPECT_EQ(a.grid.plane, b.grid.plane) << what;
         EXPECT_EQ(a.grid.pins, b.grid.pins) << what;
         EXPECT_TRUE(same_bits(a.grid.centre, b.grid.centre)) << what;
+        EXPECT_TRUE(same_bits(a.grid.pin_radius, b.grid.pin_radius)) << what;
         break;
     case ClothType::tshirt:
         EXPECT_TRUE(same_bits(a.tshirt.cells_per_metre, b.tshirt.cells_per_metre)) << what;
@@ -74,6 +75,13 @@ void expect_same_spec(const SceneSpec& a, const SceneSpec& b, const std::string&
         EXPECT_EQ(a.mesh.mesh->triangles, b.mesh.mesh->triangles) << what;
         break;
     }
+    EXPECT_EQ(a.model, b.model) << what;
+    EXPECT_EQ(a.fabric.name, b.fabric.name) << what;
+    for (auto [x, y] : {std::pair{a.fabric.density, b.fabric.density}, {a.fabric.stretch_u, b.fabric.stretch_u},
+                        {a.fabric.stretch_v, b.fabric.stretch_v}, {a.fabric.shear, b.fabric.shear},
+                        {a.fabric.bend_u, b.fabric.bend_u}, {a.fabric.bend_v, b.fabric.bend_v},
+                        {a.fabric.damping, b.fabric.damping}})
+        EXPECT_TRUE(same_bits(x, y)) << what;
     for (auto [x, y] : {std::pair{a.stiffness, b.stiffness}, {a.shear_ratio, b.shear_ratio}, {a.bend_ratio, b.bend_ratio},
                         {a.damping_ratio, b.damping_ratio}, {a.seam_stiffness, b.seam_stiffness}})
         EXPECT_TRUE(same_bits(x, y)) << what;
@@ -164,13 +172,24 @@ TEST(SceneWrite, EveryScenesRoundTripsToTheSameSpecAndCloth) {
 }
 
 TEST(SceneWrite, EveryFieldIsWrittenExplicitly) {
-    const std::string text = scene_to_json(load_scene("hang"));
+    SceneSpec springs = load_scene("hang");
+    springs.model = MaterialModel::springs;
+    const std::string text = scene_to_json(springs);
     for (const char* field : {"\"scene\"", "\"description\"", "\"type\": \"grid\"", "\"n\": 100", "\"size\"", "\"mass\"",
-                              "\"plane\"", "\"centre\"", "\"pins\": \"corners\"", "\"stiffness\": 1000", "\"shear_ratio\"",
+                              "\"plane\"", "\"centre\"", "\"pins\": \"corners\"", "\"pin_radius\": 0.01",
+                              "\"model\": \"springs\"", "\"stiffness\": 1000", "\"shear_ratio\"",
                               "\"bend_ratio\"", "\"damping_ratio\"", "\"seam_stiffness\"", "\"gravity\": [0, -9.81, 0]",
                               "\"drag\": 0.2", "\"integrator\": \"euler\"", "\"wind\"", "\"aero\"", "\"strain_limit\"",
                               "\"colliders\"", "\"body\": false"})
         EXPECT_TRUE(has(text, field)) << field << "\n" << text;
+    // The built-in hang is silk: the fabric's every figure in file units, no spring fields, no cloth mass.
+    const std::string fabric = scene_to_json(load_scene("hang"));
+    for (const char* field : {"\"model\": \"fabric\"", "\"fabric\": \"silk\"", "\"density_gsm\": 60,", "\"stretch_u\"",
+                              "\"stretch_v\"", "\"shear\"", "\"bend_u_uNm\"", "\"bend_v_uNm\"", "\"damping\"",
+                              "\"seam_stiffness\""})
+        EXPECT_TRUE(has(fabric, field)) << field << "\n" << fabric;
+    for (const char* field : {"\"mass\"", "\"stiffness\":", "\"shear_ratio\"", "\"damping_ratio\""})
+        EXPECT_FALSE(has(fabric, field)) << field << "\n" << fabric;
     EXPECT_FALSE(has(text, "\"state\""));
     EXPECT_FALSE(has(text, "\"dt\"")) << "absent dt stays absent (the default bound)";
     SceneSpec with_dt = load_scene("hang");
@@ -327,8 +346,9 @@ TEST(SceneWrite, SaveIsAtomicAndFailuresNameThePath) {
     const std::string never = (dir / "never.json").string();
     EXPECT_THROW(save_scene(never, rotated), InvalidInput);
     EXPECT_FALSE(std::filesystem::exists(never));
-    // A spec that would not load back (the node-mass rule) is refused too.
+    // A spec that would not load back (the spring model's node-mass rule) is refused too.
     SceneSpec heavy = spec;
+    heavy.model = MaterialModel::springs;
     heavy.grid.total_mass = 1000.0f;
     try {
         save_scene(never, heavy);
