@@ -73,6 +73,36 @@ TEST(Fabric, DenimIsConvertedFromItsKesFigures) {
     EXPECT_NEAR(d.density * fabric_gsm_per_kg_m2, 270.0, 1e-3);
 }
 
+TEST(Fabric, WoolIsConvertedFromItsFastFigures) {
+    // FAST (docs/fabric.md "Units: from FAST figures"): E100 4.60 / 5.87 % at 100 gf/cm, G 26.17 N/m, B in uN*m.
+    const Fabric w = *find_fabric("wool");
+    const double load = 100.0 * 9.80665e-3 / 0.01; // 98.07 N/m
+    EXPECT_NEAR(w.stretch_u, load / 0.0460, 0.1);
+    EXPECT_NEAR(w.stretch_v, load / 0.0587, 0.1);
+    EXPECT_NEAR(w.shear, 26.17, 1e-4);
+    EXPECT_NEAR(w.bend_u * fabric_uNm_per_Nm, 5.56, 1e-5);
+    EXPECT_NEAR(w.density * fabric_gsm_per_kg_m2, 168.0, 1e-3);
+    // the source's own measured warp bending length, 15.00 mm, back from B and W (Peirce: c^3 = B / (W g))
+    EXPECT_NEAR(std::cbrt(double(w.bend_u) / (double(w.density) * 9.80665)), 0.0150, 1e-4);
+}
+
+TEST(Fabric, JerseyIsWangsGrayInterlockAtZeroStrain) {
+    // ARCSim's reading of Wang et al. 2011 (docs/fabric.md "Units: from Wang ..."): k = 2 x stretching row 0,
+    // energy per area 1/2 (k0 e00^2 + 2 k1 e00 e11 + k2 e11^2 + k3 e01^2). A strip pulled along u with its sides free
+    // (zero tension across: k1 e00 + k2 e11 = 0) carries k0 e00 + k1 e11 per unit width.
+    const double k0 = 2 * 16.593832, k1 = 2 * -14.695990, k2 = 2 * 34.477123, k3 = 2 * 36.860302;
+    const Fabric j = *find_fabric("jersey");
+    const double e00 = 1e-3, e11 = -k1 * e00 / k2;
+    EXPECT_NEAR(j.stretch_u, (k0 * e00 + k1 * e11) / e00, 1e-3);
+    const double f11 = 1e-3, f00 = -k1 * f11 / k0;
+    EXPECT_NEAR(j.stretch_v, (k2 * f11 + k1 * f00) / f11, 1e-3);
+    // simple shear by an angle g: e01 = g / 2, energy 1/2 k3 (g/2)^2 = 1/2 G g^2
+    EXPECT_NEAR(j.shear, k3 / 4.0, 1e-4);
+    EXPECT_NEAR(j.density * fabric_gsm_per_kg_m2, 187.0, 1e-3);
+    EXPECT_NEAR(j.bend_v, 23.191698e-6, 1e-11); // hinges along u (ARCSim's row 0)
+    EXPECT_NEAR(j.bend_u, 14.267624e-6, 1e-11);
+}
+
 TEST(Fabric, DampingKeepsTheStiffestModeLightlyDamped) {
     // beta / dt_grid <= 0.03 at h = 1 cm, dt_grid = h / (2 sqrt(stretch / density)).
     for (const FabricPreset& p : fabric_presets()) {
@@ -345,7 +375,7 @@ TEST(Fabric, DerivedValuesOfABuiltCloth) {
     const nlohmann::ordered_json j = app::material_report(spec, b.cloth);
     EXPECT_EQ(j["model"], "fabric");
     EXPECT_EQ(j["fabric"]["name"], "wool");
-    EXPECT_NEAR(j["fabric"]["density_gsm"].get<double>(), 250.0, 1e-3);
+    EXPECT_NEAR(j["fabric"]["density_gsm"].get<double>(), double(find_fabric("wool")->density) * 1000.0, 1e-3); // g/m^2
     EXPECT_NEAR(j["derived"]["node_mass_g"].get<double>(), 1.0, 1e-5);
     EXPECT_EQ(j["derived"]["spring_k_max"]["structural"].get<float>(), 2000.0f);
 }
