@@ -196,6 +196,21 @@ TEST(FabricGrid, DefaultDtIsStableAndTheBoundIsNotLoose) {
     EXPECT_LT(default_dt(sd.cloth, 0.0f), 0.9 * b.dt_max) << "Rayleigh damping lowers the bound";
 }
 
+TEST(FabricGrid, GridKernelOnlyForTheGridsOwnBending) {
+    SceneBuild s = build_hang_scene(fabric_params(6));
+    SimulationParams p;
+    p.dt = static_cast<float>(default_dt(s.cloth, p.air_drag));
+    EXPECT_EQ(Simulation(s.cloth, s.initial, p).kernel(), KernelPath::grid);
+    // Other elements on the same grid (here: the rows only): the grid kernel's closed form no longer applies.
+    std::vector<BendElement> rows = s.cloth.bending.elements;
+    rows.resize(4 * 6);
+    set_bending(s.cloth, rows, 0.0f);
+    EXPECT_FALSE(s.cloth.bending.grid.has_value());
+    EXPECT_EQ(Simulation(s.cloth, s.initial, p).kernel(), KernelPath::csr);
+    p.kernel = KernelPath::grid;
+    EXPECT_THROW(Simulation(s.cloth, s.initial, p), InvalidInput);
+}
+
 TEST(FabricGrid, HangsOneSecondHealthyAtN64) {
     HangParams hp = fabric_params(64);
     hp.fabric.damping = 1e-4f;
