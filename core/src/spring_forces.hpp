@@ -39,7 +39,15 @@ DRAPE_INLINE fbatch spring_coefficient(const SelfBatch& s, fbatch xj, fbatch yj,
     return simd::fma(kd * rel, inv * inv, hooke);
 }
 
-/// Regular-grid stencil: neighbours at fixed offsets, contiguous unaligned loads, a per-particle slot mask.
+/// The grid stencil's slots (scene_hang.cpp builds them in this order: ascending offset; "up" is row j - 1).
+namespace grid_slot {
+inline constexpr std::size_t up2 = 0, up_left = 1, up = 2, up_right = 3, left2 = 4, left = 5, right = 6, right2 = 7,
+                             down_left = 8, down = 9, down_right = 10, down2 = 11;
+}
+
+/// Regular-grid stencil: neighbours at fixed offsets, contiguous unaligned loads, a per-particle slot mask (and the
+/// half-stiffness bits of boundary structural edges, Edge::scale 1/2, set only in the fabric model: a fabric grid
+/// whose bending was removed runs here).
 struct GridSprings {
     template <Integrator I>
     DRAPE_INLINE static Vec3b accumulate(const StepContext& c, std::size_t p, const SelfBatch& s) noexcept {
@@ -54,6 +62,9 @@ struct GridSprings {
                                                 simd::loadu(c.u + q), simd::loadu(c.v + q), simd::loadu(c.w + q),
                                                 fbatch(c.grid_k[slot]), fbatch(c.grid_krest[slot]),
                                                 fbatch(c.grid_kd[slot]), d);
+            if (slot == grid_slot::up || slot == grid_slot::left || slot == grid_slot::right || slot == grid_slot::down)
+                coef = coef * simd::select(simd::test_bits(mask, 1u << (GridStencil::half_bit + slot)), fbatch(0.5f),
+                                           fbatch(1.0f));
             coef = simd::select(simd::test_bits(mask, 1u << slot), coef, zero);
             f.x = simd::fma(coef, d.x, f.x);
             f.y = simd::fma(coef, d.y, f.y);
@@ -141,12 +152,6 @@ struct CsrFabric {
         return {f.x + fb.x, f.y + fb.y, f.z + fb.z};
     }
 };
-
-/// The grid stencil's slots (scene_hang.cpp builds them in this order: ascending offset; "up" is row j - 1).
-namespace grid_slot {
-inline constexpr std::size_t up2 = 0, up_left = 1, up = 2, up_right = 3, left2 = 4, left = 5, right = 6, right2 = 7,
-                             down_left = 8, down = 9, down_right = 10, down2 = 11;
-}
 
 /// Regular-grid fabric (MaterialModel::fabric on a grid), one pass over the 12 slots in ascending order, each
 /// neighbour loaded once:
