@@ -99,13 +99,10 @@ struct CsrSprings {
 /// damping adds to a linear force (bending: f = -Q (x + beta v)). d = x_j - x_i, du = u_j - u_i of the integrator's
 /// state; `beta` is StepContext::bend_beta. The one place the bending kernels read u, v, w:
 ///   symplectic Euler: u is the velocity, so d + beta du;
-///   position Verlet: u is the previous position, v_j - v_i = (d - du) / dt, so d + (beta / dt) (d - du) with
-///   bend_beta = beta / dt.
+///   position Verlet: u is the displacement over the last step, v_j - v_i = du / dt, so d + (beta / dt) du with
+///   bend_beta = beta / dt: the same operation.
 template <Integrator I> DRAPE_INLINE fbatch damped_difference(fbatch d, fbatch du, fbatch beta) noexcept {
-    if constexpr (I == Integrator::symplectic_euler)
-        return simd::fma(beta, du, d);
-    else
-        return simd::fma(beta, d - du, d);
+    return simd::fma(beta, du, d);
 }
 
 /// Bending over Q's SIMD-sliced rows (general path): f_i = sum_j -Q_ij (d_j + beta (v_j - v_i)), gathers of the
