@@ -545,9 +545,9 @@ TEST(ViewSession, OpensSceneFilesInTheBackgroundAndRefusesBadOnes) {
 }
 
 TEST(ViewSessionFabric, SceneFabricIsShownWithItsDerivedValues) {
-    ViewSession s("hang", 16u, 1, std::nullopt); // scene "hang": silk
+    ViewSession s("hang", 16u, 1, std::nullopt); // scene "hang": wool
     ASSERT_EQ(s.fabric().model, MaterialModel::fabric);
-    EXPECT_EQ(s.fabric().fabric.name, "silk");
+    EXPECT_EQ(s.fabric().fabric.name, "wool");
     // the derived values are the built cloth's own (the seeds' units: g per particle, N/m per spring)
     const Cloth& c = s.sim().cloth();
     EXPECT_EQ(s.fabric().stiffness[0], c.material[0].stiffness);
@@ -629,7 +629,7 @@ TEST(ViewSessionFabric, SwitchingModels) {
     s.set_material_model(MaterialModel::fabric);
     s.wait();
     EXPECT_EQ(s.fabric().model, MaterialModel::fabric);
-    EXPECT_EQ(s.fabric().fabric.name, "silk"); // the scene's fabric
+    EXPECT_EQ(s.fabric().fabric.name, "wool"); // the scene's fabric
     // --material on the command line
     ViewSession d("hang", 16u, 1, std::nullopt, std::string("denim"));
     EXPECT_EQ(d.fabric().fabric.name, "denim");
