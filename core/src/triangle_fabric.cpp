@@ -124,16 +124,23 @@ Cloth cook_triangle_fabric(const GarmentAssembly& a, std::span<const float> inv_
     edges.erase(std::unique(edges.begin(), edges.end(), [](const Edge& l, const Edge& r) { return l.a == r.a && l.b == r.b; }),
                 edges.end());
     const std::size_t triangle_edges = edges.size();
+    const std::array<double, 3> u = unit_axis(o.axis_u);
     for (Edge& e : edges) { // rest length: the assembly's spring on that edge if it has one, else the distance
         const double dx = double(a.x[e.b]) - a.x[e.a], dy = double(a.y[e.b]) - a.y[e.a], dz = double(a.z[e.b]) - a.z[e.a];
-        e.rest = float(std::sqrt(dx * dx + dy * dy + dz * dz));
+        const double l2 = dx * dx + dy * dy + dz * dz;
+        e.rest = float(std::sqrt(l2));
+        // Weave-aligned meshes: an edge more than ~8 degrees off both u and v is a shear (bias) spring, so health
+        // figures and strain limits name warp and weft strain "structural" as on grids.
+        const double c = dx * u[0] + dy * u[1] + dz * u[2];
+        const double cos2 = l2 > 0.0 ? c * c / l2 : 0.0;
+        if (o.alignment == WeaveAlignment::aligned && cos2 > 0.02 && cos2 < 0.98) e.kind = SpringKind::shear;
     }
     for (const Edge& e : a.edges) {
         if (e.kind != SpringKind::seam && e.kind != SpringKind::structural) continue;
         const std::size_t at = find_edge(std::span<const Edge>(edges.data(), triangle_edges), e.a, e.b);
         if (at != std::size_t(-1)) {
-            if (e.kind == SpringKind::structural) edges[at].rest = e.rest;
-            else edges[at].kind = SpringKind::seam, edges[at].rest = e.rest; // a seam along a triangle edge
+            edges[at].rest = e.rest;
+            if (e.kind == SpringKind::seam) edges[at].kind = SpringKind::seam; // a seam along a triangle edge
             continue;
         }
         edges.push_back({std::min(e.a, e.b), std::max(e.a, e.b), e.kind, e.rest});
@@ -141,6 +148,8 @@ Cloth cook_triangle_fabric(const GarmentAssembly& a, std::span<const float> inv_
     const double k_seam = 0.5 * (double(f.stretch_u) + f.stretch_v);
     std::array<SpringMaterial, spring_kind_count> kind_material{};
     kind_material[static_cast<std::size_t>(SpringKind::structural)] = {float(k_seam), float(f.damping * k_seam)};
+    const double k_bias = edge_modulus(f, 0.5, o.alignment) / 2.0; // a grid cell's diagonal
+    kind_material[static_cast<std::size_t>(SpringKind::shear)] = {float(k_bias), float(f.damping * k_bias)};
     kind_material[static_cast<std::size_t>(SpringKind::seam)] = {float(k_seam), float(f.damping * k_seam)};
     // Per-kind values are for display only (the per-spring materials override them); keep them in cook_cloth's range.
     for (SpringMaterial& m : kind_material) m.stiffness = std::min(m.stiffness, 1e6f), m.damping = std::min(m.damping, 1e3f);

@@ -59,8 +59,9 @@ struct TriangleFabricOptions {
     WeaveAlignment alignment = WeaveAlignment::aligned;
 };
 
-/// Cooks an assembly with the fabric model: springs on every triangle edge (SpringKind::structural, membrane
-/// stiffness per edge), the assembly's seam springs (seam stiffness above), no other springs of the assembly (its
+/// Cooks an assembly with the fabric model: springs on every triangle edge (membrane stiffness per edge; kind
+/// SpringKind::structural, or SpringKind::shear on a weave-aligned mesh for an edge more than ~8 degrees off both u
+/// and v, cos^2 in (0.02, 0.98): the kind only names it for health figures and strain limits), the assembly's seam springs (seam stiffness above), no other springs of the assembly (its
 /// structural springs in no triangle excepted: kept, k = E_e); per-edge materials (Cloth::edge_material);
 /// Cloth::triangles; hinge bending (set_bending, damping Fabric::damping). Rest lengths: the assembly's. Masses are
 /// the caller's (inv_mass, 1/kg, 0 = pinned). Throws InvalidInput.
