@@ -69,7 +69,7 @@ int main(int argc, char** argv) try {
     if (most >= 0.0) {
         const drape::Edge& s = c.edges[at];
         std::printf("now: most strained structural spring %u-%u (rest %.4g m, k %.4g N/m): strain %.4f\n", s.a, s.b,
-                    double(s.rest), double(drape::spring_material(c, at).stiffness), most);
+                    double(s.rest), double(c.material[std::size_t(s.kind)].stiffness * s.scale), most);
     }
     return 0;
 } catch (const std::exception& e) {

@@ -8,9 +8,8 @@ Forces spring_forces(const Cloth& cloth, const State& s) {
     const std::size_t n = cloth.particle_count;
     Forces f{std::vector<double>(n, 0.0), std::vector<double>(n, 0.0), std::vector<double>(n, 0.0),
              std::vector<double>(n, 0.0)};
-    for (std::size_t k = 0; k < cloth.edges.size(); ++k) {
-        const Edge& e = cloth.edges[k];
-        const SpringMaterial& m = spring_material(cloth, k);
+    for (const Edge& e : cloth.edges) {
+        const SpringMaterial& m = cloth.material[static_cast<std::size_t>(e.kind)];
         const double dx = s.x[e.b] - s.x[e.a], dy = s.y[e.b] - s.y[e.a], dz = s.z[e.b] - s.z[e.a];
         const double l2 = dx * dx + dy * dy + dz * dz;
         const double l = std::sqrt(l2);

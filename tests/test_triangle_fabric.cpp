@@ -304,7 +304,6 @@ TEST(TriangleFabric, CookedClothHasPerSpringMaterialsAndNoBendSprings) {
     const Fabric f = test_fabric();
     const Cloth c = cook_triangle_fabric(a, inv, {f, {1, 0, 0}, WeaveAlignment::aligned});
     EXPECT_EQ(c.edges.size(), triangle_edges(a).size() + seams.size());
-    ASSERT_EQ(c.edge_material.size(), c.edges.size());
     std::size_t seam_count = 0;
     for (std::size_t e = 0; e < c.edges.size(); ++e) {
         EXPECT_NE(c.edges[e].kind, SpringKind::bend);
@@ -312,20 +311,24 @@ TEST(TriangleFabric, CookedClothHasPerSpringMaterialsAndNoBendSprings) {
             const double dx = std::fabs(a.x[c.edges[e].b] - a.x[c.edges[e].a]), dy = std::fabs(a.y[c.edges[e].b] - a.y[c.edges[e].a]);
             EXPECT_GT(std::min(dx, dy), 0.1 * std::max(dx, dy));
         }
-        const SpringMaterial& m = c.edge_material[e];
-        EXPECT_GT(m.stiffness, 0.0f);
-        EXPECT_FLOAT_EQ(m.damping, f.damping * m.stiffness);
+        const SpringMaterial& kind = c.material[static_cast<std::size_t>(c.edges[e].kind)];
+        const float k = kind.stiffness * c.edges[e].scale, kd = kind.damping * c.edges[e].scale;
+        EXPECT_GT(k, 0.0f);
+        EXPECT_FLOAT_EQ(kd, f.damping * k);
         if (c.edges[e].kind == SpringKind::seam) {
             ++seam_count;
-            EXPECT_FLOAT_EQ(m.stiffness, 3500.0f);
+            EXPECT_FLOAT_EQ(k, 3500.0f);
         }
     }
     EXPECT_EQ(seam_count, seams.size());
     EXPECT_EQ(c.triangles, a.triangles);
-    // The per-entry stiffness of the kernels is the spring's own.
-    for (std::size_t at = 0; at < c.graph.sell_entry_count(); ++at)
-        if (c.graph.sell_edge[at] != UINT32_MAX) {
-            EXPECT_EQ(c.graph.sell_stiffness[at], c.edge_material[c.graph.sell_edge[at]].stiffness);
+    // Each spring's stiffness is the membrane's for its edge.
+    const std::vector<double> expected =
+        membrane_stiffness(a.x, a.y, a.z, a.triangles, c.edges, f, {1, 0, 0}, WeaveAlignment::aligned);
+    for (std::size_t e = 0; e < c.edges.size(); ++e)
+        if (c.edges[e].kind != SpringKind::seam) {
+            EXPECT_NEAR(c.material[static_cast<std::size_t>(c.edges[e].kind)].stiffness * c.edges[e].scale, expected[e],
+                        1e-5 * expected[e]);
         }
 }
 
@@ -338,8 +341,9 @@ TEST(TriangleFabric, ScenesCookWithTheFabricModel) {
         spec.fabric = test_fabric();
         const BuiltScene b = build_scene(spec);
         EXPECT_EQ(b.cloth.particle_count, springs.cloth.particle_count) << name;
-        EXPECT_TRUE(springs.cloth.edge_material.empty()) << name;
-        ASSERT_EQ(b.cloth.edge_material.size(), b.cloth.edges.size()) << name;
+        for (const Edge& e : springs.cloth.edges) EXPECT_EQ(e.scale, 1.0f) << name;
+        EXPECT_TRUE(springs.cloth.bending.empty()) << name;
+        EXPECT_FALSE(b.cloth.bending.empty()) << name;
         for (const Edge& e : b.cloth.edges) EXPECT_NE(e.kind, SpringKind::bend) << name;
         EXPECT_EQ(b.cloth.triangles, springs.cloth.triangles) << name;
         // Node masses: the fabric's density times the area, whatever the scene's own mass figures.

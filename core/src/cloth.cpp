@@ -84,25 +84,10 @@ void apply_materials(Cloth& cloth, const std::array<SpringMaterial, spring_kind_
     for (std::size_t at = 0; at < g.sell_entry_count(); ++at) {
         const std::uint32_t e = g.sell_edge[at];
         if (e == std::numeric_limits<std::uint32_t>::max()) continue;
-        const SpringMaterial& m = spring_material(cloth, e);
+        const SpringMaterial& m = material[static_cast<std::size_t>(cloth.edges[e].kind)];
         g.sell_stiffness[at] = m.stiffness;
         g.sell_damping[at] = m.damping;
     }
-}
-
-void set_edge_materials(Cloth& cloth, std::vector<SpringMaterial> materials) {
-    if (materials.size() != cloth.edges.size())
-        throw InvalidInput("per-spring materials: " + std::to_string(materials.size()) + " for " +
-                           std::to_string(cloth.edges.size()) + " springs");
-    for (std::size_t e = 0; e < materials.size(); ++e) {
-        const SpringMaterial& m = materials[e];
-        if (!(m.stiffness >= 0.0f) || !std::isfinite(m.stiffness) || !(m.damping >= 0.0f) || !std::isfinite(m.damping))
-            throw InvalidInput("spring " + std::to_string(cloth.edges[e].a) + "-" + std::to_string(cloth.edges[e].b) +
-                               ": stiffness " + std::to_string(m.stiffness) + " N/m, damping " +
-                               std::to_string(m.damping) + " N*s/m (both must be finite and >= 0)");
-    }
-    cloth.edge_material = std::move(materials);
-    apply_materials(cloth, cloth.material);
 }
 
 std::optional<GridStructuralRest> uniform_grid_structural(const Cloth& cloth) {

@@ -36,17 +36,10 @@ void HealthMonitor::init(const Cloth& cloth, const SimulationParams& params) {
     chunk_elastic_.assign(chunk_strain_.size(), 0.0);
     block_box_.assign(7 * blocks, 0.0f);
     for (auto* v : {&snap_x_, &snap_y_, &snap_z_, &snap_u_, &snap_v_, &snap_w_}) v->assign(n, 0.0f);
-    // Per-spring materials: the softest structural spring (the bound on strain from the energy is then the largest).
-    k_struct_ = cloth.edge_material.empty() ? cloth.material[static_cast<std::size_t>(SpringKind::structural)].stiffness : 0.0;
+    k_struct_ = cloth.material[static_cast<std::size_t>(SpringKind::structural)].stiffness;
     rest_min_ = 0.0;
-    for (std::size_t k = 0; k < cloth.edges.size(); ++k) {
-        const Edge& e = cloth.edges[k];
-        if (e.kind != SpringKind::structural) continue;
-        rest_min_ = rest_min_ == 0.0 ? e.rest : std::min(rest_min_, double(e.rest));
-        if (!cloth.edge_material.empty() && cloth.edge_material[k].stiffness > 0.0f)
-            k_struct_ = k_struct_ == 0.0 ? cloth.edge_material[k].stiffness
-                                         : std::min(k_struct_, double(cloth.edge_material[k].stiffness));
-    }
+    for (const Edge& e : cloth.edges)
+        if (e.kind == SpringKind::structural) rest_min_ = rest_min_ == 0.0 ? e.rest : std::min(rest_min_, double(e.rest));
     dt_bound_ = stability_bound(cloth, params).dt_max;
 }
 
@@ -145,7 +138,7 @@ void HealthMonitor::rebaseline(const Cloth& cloth, const SimulationParams& param
             const Edge& edge = cloth.edges[k];
             const float dx = s.x[edge.b] - s.x[edge.a], dy = s.y[edge.b] - s.y[edge.a], dz = s.z[edge.b] - s.z[edge.a];
             const double stretch = std::sqrt(double(dx) * dx + double(dy) * dy + double(dz) * dz) - edge.rest;
-            e += 0.5 * spring_material(cloth, k).stiffness * stretch * stretch;
+            e += 0.5 * cloth.material[static_cast<std::size_t>(edge.kind)].stiffness * stretch * stretch;
         }
         chunk_elastic_[ch] = e;
     });

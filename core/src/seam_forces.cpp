@@ -29,7 +29,7 @@ template <bool Parallel> void Simulation::seam_forces_stage() {
     auto range = [&](std::size_t begin, std::size_t end) {
         for (std::size_t k = begin; k < end; ++k) {
             const std::uint32_t a = s.a[k], b = s.b[k];
-            const SpringMaterial& m = spring_material(cloth_, s.groups.edge_index[k]);
+            const SpringMaterial& m = cloth_.material[static_cast<std::size_t>(s.kind[k])];
             const float dx = st.x[b] - st.x[a], dy = st.y[b] - st.y[a], dz = st.z[b] - st.z[a];
             const float l2 = std::max(dx * dx + dy * dy + dz * dz, 1e-24f);
             const float inv = 1.0f / std::sqrt(l2);

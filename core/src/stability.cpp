@@ -81,9 +81,8 @@ StabilityBound stability_bound(const Cloth& cloth, float air_drag, const AeroWin
     const AeroTerms aero_t = aero ? aero_terms(cloth, *aero)
                                   : AeroTerms{std::vector<double>(n, 0.0), std::vector<double>(n, 0.0)};
     StabilityBound b;
-    for (std::size_t k = 0; k < cloth.edges.size(); ++k) {
-        const Edge& e = cloth.edges[k];
-        const SpringMaterial& m = spring_material(cloth, k);
+    for (const Edge& e : cloth.edges) {
+        const SpringMaterial& m = cloth.material[static_cast<std::size_t>(e.kind)];
         sum_k[e.a] += m.stiffness;
         sum_k[e.b] += m.stiffness;
         sum_kd[e.a] += m.damping;

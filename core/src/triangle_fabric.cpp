@@ -20,7 +20,7 @@ std::array<double, 3> unit_axis(const std::array<float, 3>& axis) {
     return {axis[0] / l, axis[1] / l, axis[2] / l};
 }
 
-/// Index of spring (a, b) in `edges` sorted by (a, b) with a < b (as cook_cloth leaves them), or npos.
+/// Index of spring (a, b) in `edges` sorted by (a, b) with a < b, or npos.
 std::size_t find_edge(std::span<const Edge> edges, std::uint32_t a, std::uint32_t b) {
     if (a > b) std::swap(a, b);
     const auto it = std::lower_bound(edges.begin(), edges.end(), std::pair{a, b}, [](const Edge& e, const auto& key) {
@@ -145,23 +145,17 @@ Cloth cook_triangle_fabric(const GarmentAssembly& a, std::span<const float> inv_
         }
         edges.push_back({std::min(e.a, e.b), std::max(e.a, e.b), e.kind, e.rest});
     }
-    const double k_seam = 0.5 * (double(f.stretch_u) + f.stretch_v);
-    std::array<SpringMaterial, spring_kind_count> kind_material{};
-    kind_material[static_cast<std::size_t>(SpringKind::structural)] = {float(k_seam), float(f.damping * k_seam)};
-    const double k_bias = edge_modulus(f, 0.5, o.alignment) / 2.0; // a grid cell's diagonal
-    kind_material[static_cast<std::size_t>(SpringKind::shear)] = {float(k_bias), float(f.damping * k_bias)};
-    kind_material[static_cast<std::size_t>(SpringKind::seam)] = {float(k_seam), float(f.damping * k_seam)};
-    // Per-kind values are for display only (the per-spring materials override them); keep them in cook_cloth's range.
-    for (SpringMaterial& m : kind_material) m.stiffness = std::min(m.stiffness, 1e6f), m.damping = std::min(m.damping, 1e3f);
-    Cloth cloth = cook_cloth(inv_mass, std::move(edges), kind_material);
-    const std::vector<double> k =
-        membrane_stiffness(a.x, a.y, a.z, a.triangles, cloth.edges, f, o.axis_u, o.alignment);
-    std::vector<SpringMaterial> per_edge(cloth.edges.size());
-    for (std::size_t e = 0; e < per_edge.size(); ++e) {
-        const double ke = cloth.edges[e].kind == SpringKind::seam ? k_seam : k[e];
-        per_edge[e] = {float(ke), float(double(f.damping) * ke)};
-    }
-    set_edge_materials(cloth, std::move(per_edge));
+    // Stiffness: each kind's material is a reference (k_ref = the mean of stretch_u and stretch_v, damping
+    // Fabric::damping x k_ref) and each spring's Edge::scale its own stiffness over k_ref, so stiffness and damping
+    // are k_e and Fabric::damping x k_e. Seams: k_ref, scale 1.
+    const double k_ref = 0.5 * (double(f.stretch_u) + f.stretch_v);
+    const std::vector<double> k = membrane_stiffness(a.x, a.y, a.z, a.triangles, edges, f, o.axis_u, o.alignment);
+    for (std::size_t e = 0; e < edges.size(); ++e)
+        edges[e].scale = edges[e].kind == SpringKind::seam ? 1.0f : float(k[e] / k_ref);
+    std::array<SpringMaterial, spring_kind_count> material{};
+    for (SpringKind kind : {SpringKind::structural, SpringKind::shear, SpringKind::seam})
+        material[static_cast<std::size_t>(kind)] = {float(k_ref), float(double(f.damping) * k_ref)};
+    Cloth cloth = cook_cloth(inv_mass, std::move(edges), material);
     cloth.triangles = a.triangles;
     set_bending(cloth, hinge_bending_elements(a.x, a.y, a.z, a.triangles, f.bend_u, f.bend_v, o.axis_u), f.damping);
     return cloth;

@@ -66,10 +66,6 @@ struct Cloth {
     std::vector<float> free_inv_mass;
     std::array<SpringMaterial, spring_kind_count> material{};
     std::vector<Edge> edges;         ///< every spring once (cold list; health and colouring read it)
-    /// Per-spring materials, one per entry of `edges` (the fabric model on triangle meshes: each spring's stiffness
-    /// comes from its triangles, triangle_fabric.hpp). Empty: every spring has material[its kind]. When present it
-    /// overrides `material` for every spring, seams included; read a spring's material with spring_material().
-    std::vector<SpringMaterial> edge_material;
     SpringGraph graph;               ///< CSR and SIMD-sliced CSR over the edges, seams excepted
     SeamSet seams;                   ///< seam springs, coloured
     std::optional<GridStencil> grid; ///< present when the cloth is a full or masked regular grid
@@ -102,19 +98,8 @@ constexpr std::size_t pad_to_width(std::size_t n) noexcept {
 Cloth cook_cloth(std::span<const float> inv_mass, std::vector<Edge> edges,
                  const std::array<SpringMaterial, spring_kind_count>& material, std::size_t halo = 0);
 
-/// Re-fills every per-entry stiffness and damping from `material` (after the user changes a material). A cloth with
-/// per-spring materials (edge_material) keeps them: only Cloth::material changes.
+/// Re-fills every per-entry stiffness and damping from `material` (after the user changes a material).
 void apply_materials(Cloth& cloth, const std::array<SpringMaterial, spring_kind_count>& material);
-
-/// Gives every spring its own material (one per Cloth::edges entry) and fills the per-entry stiffness and damping
-/// from them. Throws InvalidInput on a count mismatch or a stiffness or damping that is negative or not finite.
-void set_edge_materials(Cloth& cloth, std::vector<SpringMaterial> materials);
-
-/// The material of spring `edge` (an index into Cloth::edges).
-inline const SpringMaterial& spring_material(const Cloth& cloth, std::size_t edge) noexcept {
-    return cloth.edge_material.empty() ? cloth.material[static_cast<std::size_t>(cloth.edges[edge].kind)]
-                                       : cloth.edge_material[edge];
-}
 
 /// Rest lengths of a grid cloth's structural springs when they are exactly the grid's east and south neighbours
 /// (every neighbour pair has its spring, no other structural spring), each direction with one rest length: the

@@ -8,6 +8,8 @@
 //   - Mass: areal density x triangle area, a third to each corner (lumped_masses).
 //   - Seams (SpringKind::seam): as stiff as one membrane edge of the fabric across one cell, k = (stretch_u +
 //     stretch_v) / 2 (a strip of fabric as wide as it is long), damping Fabric::damping x k.
+// Each kind's material holds k_ref = (stretch_u + stretch_v) / 2 (damping Fabric::damping x k_ref) and each spring's
+// Edge::scale is k_e / k_ref (seams 1): changing a kind's material later scales all its springs together.
 #pragma once
 
 #include <array>
@@ -62,7 +64,7 @@ struct TriangleFabricOptions {
 /// Cooks an assembly with the fabric model: springs on every triangle edge (membrane stiffness per edge; kind
 /// SpringKind::structural, or SpringKind::shear on a weave-aligned mesh for an edge more than ~8 degrees off both u
 /// and v, cos^2 in (0.02, 0.98): the kind only names it for health figures and strain limits), the assembly's seam springs (seam stiffness above), no other springs of the assembly (its
-/// structural springs in no triangle excepted: kept, k = E_e); per-edge materials (Cloth::edge_material);
+/// structural springs in no triangle excepted: kept, k = E_e); per-spring stiffness as Edge::scale (above);
 /// Cloth::triangles; hinge bending (set_bending, damping Fabric::damping). Rest lengths: the assembly's. Masses are
 /// the caller's (inv_mass, 1/kg, 0 = pinned). Throws InvalidInput.
 Cloth cook_triangle_fabric(const GarmentAssembly& assembly, std::span<const float> inv_mass,
