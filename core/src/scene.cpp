@@ -42,6 +42,19 @@ std::string format_number(double v) {
     return out.str();
 }
 
+/// Fabric model, mesh cloth: a warning when the OBJ is not flat (the hinge bending assumes a flat rest shape).
+void warn_curved_mesh(SceneSpec& s) {
+    if (s.model != MaterialModel::fabric || s.cloth != ClothType::mesh || !s.mesh.mesh) return;
+    const TriangleMesh& m = *s.mesh.mesh;
+    const std::vector<float> x(m.x.begin(), m.x.end()), y(m.y.begin(), m.y.end()), z(m.z.begin(), m.z.end());
+    const double angle = hinge_rest_angle_max(x, y, z, m.triangles) * 180.0 / 3.14159265358979323846;
+    if (angle > 1.0)
+        s.warnings.push_back(s.source + ": cloth.file: the mesh is not flat (neighbouring triangles meet at up to " +
+                             format_number(angle) +
+                             " degrees); the fabric model's bending (Bergou et al. 2006) takes the flat sheet as "
+                             "its rest shape, so curved parts of the mesh are pulled towards flat");
+}
+
 /// JSON paths ("cloth.n", "physics.gravity[1]") of numbers the file writes but a double cannot hold (1e400, a 400-digit
 /// integer) or that JSON does not have (NaN, Infinity), each with its text as written. The document holds 0 there;
 /// the reader reports the value at its field, with the field's allowed range.
@@ -426,19 +439,6 @@ void read_mesh_cloth(ObjectReader& cloth, const std::string& base_dir, SceneSpec
     }
     const std::string note = m.mesh->cleaning_note();
     if (!note.empty()) s.warnings.push_back(cloth.source() + ": cloth.file \"" + file + "\": " + note);
-}
-
-/// Fabric model, mesh cloth: a warning when the OBJ is not flat (the hinge bending assumes a flat rest shape).
-void warn_curved_mesh(SceneSpec& s) {
-    if (s.model != MaterialModel::fabric || s.cloth != ClothType::mesh || !s.mesh.mesh) return;
-    const TriangleMesh& m = *s.mesh.mesh;
-    const std::vector<float> x(m.x.begin(), m.x.end()), y(m.y.begin(), m.y.end()), z(m.z.begin(), m.z.end());
-    const double angle = hinge_rest_angle_max(x, y, z, m.triangles) * 180.0 / 3.14159265358979323846;
-    if (angle > 1.0)
-        s.warnings.push_back(s.source + ": cloth.file: the mesh is not flat (neighbouring triangles meet at up to " +
-                             format_number(angle) +
-                             " degrees); the fabric model's bending (Bergou et al. 2006) takes the flat sheet as "
-                             "its rest shape, so curved parts of the mesh are pulled towards flat");
 }
 
 inline constexpr double state_limit = 1e6; ///< |position| (m) and |velocity| (m/s) in a saved state

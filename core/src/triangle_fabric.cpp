@@ -153,8 +153,9 @@ Cloth cook_triangle_fabric(const GarmentAssembly& a, std::span<const float> inv_
     for (std::size_t e = 0; e < edges.size(); ++e)
         edges[e].scale = edges[e].kind == SpringKind::seam ? 1.0f : float(k[e] / k_ref);
     std::array<SpringMaterial, spring_kind_count> material{};
-    for (SpringKind kind : {SpringKind::structural, SpringKind::shear, SpringKind::seam})
+    for (SpringKind kind : {SpringKind::structural, SpringKind::shear})
         material[static_cast<std::size_t>(kind)] = {float(k_ref), float(double(f.damping) * k_ref)};
+    material[static_cast<std::size_t>(SpringKind::seam)] = {float(k_ref), float(double(f.damping) * k_ref)};
     Cloth cloth = cook_cloth(inv_mass, std::move(edges), material);
     cloth.triangles = a.triangles;
     set_bending(cloth, hinge_bending_elements(a.x, a.y, a.z, a.triangles, f.bend_u, f.bend_v, o.axis_u), f.damping);
