@@ -1,6 +1,7 @@
-// Hinge bending elements on triangle meshes (Bergou et al. 2006): zero on the flat rest mesh and under rigid motions,
-// the cylinder energy B / (2 R^2) x area converging with spacing (grid-triangulated panels and Delaunay discs), the
-// orthotropic rigidity by bending direction, and the energy's gradient and Hessian against finite differences.
+// Hinge bending elements on triangle meshes (Bergou et al. 2006): zero on the flat rest mesh and under rigid
+// motions, the cylinder energy B / (2 R^2) x area converging with spacing (grid-triangulated panels and
+// Delaunay discs), the orthotropic rigidity by bending direction, and the energy's gradient and Hessian
+// against finite differences.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -32,9 +33,11 @@ struct Mesh {
     }
 };
 
-/// A w x h panel in the x-y plane at spacing s, each cell split along its (r, c+1)-(r+1, c) diagonal (as mask panels).
+/// A w x h panel in the x-y plane at spacing s, each cell split along its (r, c+1)-(r+1, c) diagonal (as mask
+/// panels).
 Mesh grid_panel(double w, double h, double s) {
-    const auto nx = static_cast<std::uint32_t>(std::lround(w / s)) + 1, ny = static_cast<std::uint32_t>(std::lround(h / s)) + 1;
+    const auto nx = static_cast<std::uint32_t>(std::lround(w / s)) + 1,
+               ny = static_cast<std::uint32_t>(std::lround(h / s)) + 1;
     Mesh m;
     for (std::uint32_t r = 0; r < ny; ++r)
         for (std::uint32_t c = 0; c < nx; ++c) {
@@ -50,10 +53,12 @@ Mesh grid_panel(double w, double h, double s) {
     return m;
 }
 
-/// A w x h panel of equilateral triangles of side s (rows s sqrt(3) / 2 apart, every other row shifted by s / 2).
+/// A w x h panel of equilateral triangles of side s (rows s sqrt(3) / 2 apart, every other row shifted by s /
+/// 2).
 Mesh equilateral_panel(double w, double h, double s) {
     const double dy = s * std::sqrt(3.0) / 2.0;
-    const auto nx = static_cast<std::uint32_t>(std::lround(w / s)) + 1, ny = static_cast<std::uint32_t>(std::lround(h / dy)) + 1;
+    const auto nx = static_cast<std::uint32_t>(std::lround(w / s)) + 1,
+               ny = static_cast<std::uint32_t>(std::lround(h / dy)) + 1;
     Mesh m;
     for (std::uint32_t r = 0; r < ny; ++r)
         for (std::uint32_t c = 0; c < nx; ++c) {
@@ -64,8 +69,10 @@ Mesh equilateral_panel(double w, double h, double s) {
     for (std::uint32_t r = 0; r + 1 < ny; ++r)
         for (std::uint32_t c = 0; c + 1 < nx; ++c) {
             const std::uint32_t a = r * nx + c, b = a + 1, d = a + nx, e = d + 1;
-            if (r % 2 == 0) m.tri.insert(m.tri.end(), {a, b, d, b, e, d});
-            else m.tri.insert(m.tri.end(), {a, e, d, a, b, e});
+            if (r % 2 == 0)
+                m.tri.insert(m.tri.end(), {a, b, d, b, e, d});
+            else
+                m.tri.insert(m.tri.end(), {a, e, d, a, b, e});
         }
     return m;
 }
@@ -100,7 +107,8 @@ double energy(const std::vector<BendElement>& el, const Mesh& m) {
     return e;
 }
 
-/// Wraps the flat mesh (z = 0) onto a cylinder of radius R whose axis is along y (axis_y) or x, tangent at z = 0.
+/// Wraps the flat mesh (z = 0) onto a cylinder of radius R whose axis is along y (axis_y) or x, tangent at z
+/// = 0.
 Mesh wrap(const Mesh& flat, double R, bool axis_y) {
     Mesh m = flat;
     for (std::size_t i = 0; i < m.x.size(); ++i) {
@@ -120,7 +128,8 @@ TEST(HingeBending, OneElementPerInteriorEdge) {
     const std::size_t edges = ny * (nx - 1) + nx * (ny - 1) + (nx - 1) * (ny - 1);
     const std::size_t boundary = 2 * (nx - 1) + 2 * (ny - 1);
     EXPECT_EQ(hinge_bending_elements(m.x, m.y, m.z, m.tri, 1e-6f, 1e-6f, ux).size(), edges - boundary);
-    // A non-manifold edge (a third triangle on an interior edge) gets none: the fan edge 0-12 of the first cell.
+    // A non-manifold edge (a third triangle on an interior edge) gets none: the fan edge 0-12 of the first
+    // cell.
     Mesh n = m;
     n.x.push_back(0.0f), n.y.push_back(0.0f), n.z.push_back(0.05f);
     const std::uint32_t top = static_cast<std::uint32_t>(n.x.size() - 1);
@@ -141,7 +150,7 @@ TEST(HingeBending, ZeroOnTheFlatMeshAndUnderRigidMotions) {
     Mesh r = m;
     for (std::size_t i = 0; i < m.x.size(); ++i) {
         const double x = m.x[i], y = m.y[i], z = m.z[i];
-        const double x1 = c * x - s * y, y1 = s * x + c * y; // about z
+        const double x1 = c * x - s * y, y1 = s * x + c * y;   // about z
         const double y2 = c * y1 - s * z, z2 = s * y1 + c * z; // about x
         r.x[i] = float(x1 + 0.6), r.y[i] = float(y2 - 0.8), r.z[i] = float(z2 + 0.3);
     }
@@ -161,8 +170,10 @@ TEST(HingeBending, CylinderEnergyConvergesOnAGridPanel) {
     double previous = 1.0;
     for (double s : {0.02, 0.01, 0.005}) {
         const double err = cylinder_error(grid_panel(0.2, 0.2, s), B, R);
-        EXPECT_LT(std::fabs(err), 0.12) << "spacing " << s; // the boundary edges have no hinge: O(h / size) low
-        EXPECT_LT(std::fabs(err), std::fabs(previous)) << "spacing " << s << ": the error must fall with spacing";
+        EXPECT_LT(std::fabs(err), 0.12)
+            << "spacing " << s; // the boundary edges have no hinge: O(h / size) low
+        EXPECT_LT(std::fabs(err), std::fabs(previous))
+            << "spacing " << s << ": the error must fall with spacing";
         previous = err;
         std::printf("grid panel 0.2 m, h = %.3f m: E / (B A / 2 R^2) - 1 = %+.4f\n", s, err);
     }
@@ -205,8 +216,8 @@ TEST(HingeBending, OrthotropicRigidityFollowsTheBendingDirection) {
     const double R = 0.15, area = m.area();
     const double along_u = energy(el, wrap(m, R, true)) / (bu / (2 * R * R) * area);
     const double along_v = energy(el, wrap(m, R, false)) / (bv / (2 * R * R) * area);
-    std::printf("bend_u = 4 bend_v: along u E / (B_u A / 2R^2) = %.4f, along v E / (B_v A / 2R^2) = %.4f\n", along_u,
-                along_v);
+    std::printf("bend_u = 4 bend_v: along u E / (B_u A / 2R^2) = %.4f, along v E / (B_v A / 2R^2) = %.4f\n",
+                along_u, along_v);
     EXPECT_NEAR(along_u, 1.0, 0.05);
     EXPECT_NEAR(along_v, 1.0, 0.05);
 }
@@ -217,26 +228,31 @@ TEST(HingeBending, GradientAndHessianMatchFiniteDifferences) {
     Mesh m = wrap(flat, 0.08, true);
     std::mt19937 rng(7);
     std::uniform_real_distribution<float> d(-0.002f, 0.002f);
-    for (std::size_t i = 0; i < m.x.size(); ++i) m.x[i] += d(rng), m.y[i] += d(rng), m.z[i] += d(rng);
+    for (std::size_t i = 0; i < m.x.size(); ++i)
+        m.x[i] += d(rng), m.y[i] += d(rng), m.z[i] += d(rng);
     // Analytic gradient: grad_i E = sum_e w_e c_ei q_e; Hessian block (i, j) = sum_e w_e c_ei c_ej I3.
     const std::size_t n = m.x.size();
     std::vector<double> g(3 * n, 0.0);
     for (const BendElement& b : el) {
         double q[3] = {0, 0, 0};
-        for (int k = 0; k < 4; ++k) q[0] += b.c[k] * double(m.x[b.v[k]]), q[1] += b.c[k] * double(m.y[b.v[k]]),
-                                    q[2] += b.c[k] * double(m.z[b.v[k]]);
         for (int k = 0; k < 4; ++k)
-            for (int a = 0; a < 3; ++a) g[3 * b.v[k] + a] += double(b.weight) * b.c[k] * q[a];
+            q[0] += b.c[k] * double(m.x[b.v[k]]), q[1] += b.c[k] * double(m.y[b.v[k]]),
+                q[2] += b.c[k] * double(m.z[b.v[k]]);
+        for (int k = 0; k < 4; ++k)
+            for (int a = 0; a < 3; ++a)
+                g[3 * b.v[k] + a] += double(b.weight) * b.c[k] * q[a];
     }
     // Energy and gradient in double at perturbed double positions (the float mesh would round the step away).
     std::vector<double> X(3 * n);
-    for (std::size_t i = 0; i < n; ++i) X[3 * i] = m.x[i], X[3 * i + 1] = m.y[i], X[3 * i + 2] = m.z[i];
+    for (std::size_t i = 0; i < n; ++i)
+        X[3 * i] = m.x[i], X[3 * i + 1] = m.y[i], X[3 * i + 2] = m.z[i];
     const auto E = [&](const std::vector<double>& p) {
         double e = 0.0;
         for (const BendElement& b : el) {
             double q[3] = {0, 0, 0};
             for (int k = 0; k < 4; ++k)
-                for (int a = 0; a < 3; ++a) q[a] += b.c[k] * p[3 * b.v[k] + a];
+                for (int a = 0; a < 3; ++a)
+                    q[a] += b.c[k] * p[3 * b.v[k] + a];
             e += 0.5 * b.weight * (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
         }
         return e;
@@ -248,13 +264,15 @@ TEST(HingeBending, GradientAndHessianMatchFiniteDifferences) {
                 if (3 * b.v[k] + 0 <= i && i < 3 * b.v[k] + 3) {
                     const int a = int(i - 3 * b.v[k]);
                     double q = 0.0;
-                    for (int j = 0; j < 4; ++j) q += b.c[j] * p[3 * b.v[j] + a];
+                    for (int j = 0; j < 4; ++j)
+                        q += b.c[j] * p[3 * b.v[j] + a];
                     gi += b.weight * b.c[k] * q;
                 }
         return gi;
     };
     double gmax = 0.0;
-    for (double v : g) gmax = std::max(gmax, std::fabs(v));
+    for (double v : g)
+        gmax = std::max(gmax, std::fabs(v));
     ASSERT_GT(gmax, 0.0);
     const double h = 1e-5;
     for (std::size_t i = 0; i < 3 * n; i += 7) {
@@ -269,7 +287,8 @@ TEST(HingeBending, GradientAndHessianMatchFiniteDifferences) {
                 for (const BendElement& b : el)
                     for (int k = 0; k < 4; ++k)
                         for (int l = 0; l < 4; ++l)
-                            if (3 * b.v[k] + j % 3 == j && 3 * b.v[l] + i % 3 == i) exact += b.weight * b.c[k] * b.c[l];
+                            if (3 * b.v[k] + j % 3 == j && 3 * b.v[l] + i % 3 == i)
+                                exact += b.weight * b.c[k] * b.c[l];
             EXPECT_NEAR(fd, exact, 1e-6 * std::max(1.0, std::fabs(exact))) << i << ", " << j;
         }
     }
@@ -288,7 +307,8 @@ TEST(HingeBending, CurvedRestMeshesAreMeasured) {
 TEST(HingeBending, BadInputIsRefused) {
     const Mesh m = grid_panel(0.02, 0.02, 0.01);
     EXPECT_THROW(hinge_bending_elements(m.x, m.y, m.z, m.tri, -1.0f, 1e-6f, ux), InvalidInput);
-    EXPECT_THROW(hinge_bending_elements(m.x, m.y, m.z, m.tri, 1e-6f, 1e-6f, {0.0f, 0.0f, 0.0f}), InvalidInput);
+    EXPECT_THROW(hinge_bending_elements(m.x, m.y, m.z, m.tri, 1e-6f, 1e-6f, {0.0f, 0.0f, 0.0f}),
+                 InvalidInput);
     std::vector<std::uint32_t> bad = m.tri;
     bad[4] = 99;
     EXPECT_THROW(hinge_bending_elements(m.x, m.y, m.z, bad, 1e-6f, 1e-6f, ux), InvalidInput);

@@ -1,6 +1,6 @@
-// Bending elements of a triangle mesh: the quadratic (isometric) bending model of Bergou, Wardetzky, Harmon, Zorin and
-// Grinspun 2006. See bending.hpp for the formulas and docs/fabric.md ("Triangle meshes") for the derivation of the
-// weight and the orthotropic rigidity.
+// Bending elements of a triangle mesh: the quadratic (isometric) bending model of Bergou, Wardetzky, Harmon,
+// Zorin and Grinspun 2006. See bending.hpp for the formulas and docs/fabric.md ("Triangle meshes") for the
+// derivation of the weight and the orthotropic rigidity.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -16,17 +16,23 @@ namespace {
 
 using Vec = std::array<double, 3>;
 
-Vec sub(const Vec& a, const Vec& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot(const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Vec sub(const Vec& a, const Vec& b) {
+    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+}
+double dot(const Vec& a, const Vec& b) {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
 Vec cross(const Vec& a, const Vec& b) {
     return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
 }
-double norm(const Vec& a) { return std::sqrt(dot(a, a)); }
+double norm(const Vec& a) {
+    return std::sqrt(dot(a, a));
+}
 
 /// One side of an edge: the triangle and its vertex opposite the edge.
 struct HalfEdge {
-    std::uint32_t a, b;    ///< edge ends, a < b
-    std::uint32_t first;   ///< the triangle's vertex that comes first in its own winding, of a and b
+    std::uint32_t a, b;  ///< edge ends, a < b
+    std::uint32_t first; ///< the triangle's vertex that comes first in its own winding, of a and b
     std::uint32_t opposite;
     std::uint32_t triangle;
 };
@@ -44,7 +50,8 @@ void for_each_hinge(std::span<const std::uint32_t> triangles, std::size_t partic
         for (int k = 0; k < 3; ++k) {
             if (v[k] >= particles)
                 throw InvalidInput("hinge bending: triangle " + std::to_string(t) + " names particle " +
-                                   std::to_string(v[k]) + " (the mesh has " + std::to_string(particles) + ")");
+                                   std::to_string(v[k]) + " (the mesh has " + std::to_string(particles) +
+                                   ")");
             const std::uint32_t p = v[k], q = v[(k + 1) % 3], o = v[(k + 2) % 3];
             if (p == q) continue;
             half.push_back({std::min(p, q), std::max(p, q), p, o, static_cast<std::uint32_t>(t)});
@@ -55,7 +62,8 @@ void for_each_hinge(std::span<const std::uint32_t> triangles, std::size_t partic
     });
     for (std::size_t i = 0; i < half.size();) {
         std::size_t j = i + 1;
-        while (j < half.size() && half[j].a == half[i].a && half[j].b == half[i].b) ++j;
+        while (j < half.size() && half[j].a == half[i].a && half[j].b == half[i].b)
+            ++j;
         if (j - i == 2 && half[i].opposite != half[i + 1].opposite) f(half[i], half[i + 1]);
         i = j;
     }
@@ -64,15 +72,17 @@ void for_each_hinge(std::span<const std::uint32_t> triangles, std::size_t partic
 } // namespace
 
 std::vector<BendElement> hinge_bending_elements(std::span<const float> x, std::span<const float> y,
-                                                std::span<const float> z, std::span<const std::uint32_t> triangles,
-                                                float bend_u, float bend_v, const std::array<float, 3>& axis_u) {
+                                                std::span<const float> z,
+                                                std::span<const std::uint32_t> triangles, float bend_u,
+                                                float bend_v, const std::array<float, 3>& axis_u) {
     if (x.size() != y.size() || x.size() != z.size())
         throw InvalidInput("hinge bending: position arrays of different lengths");
     if (!(bend_u >= 0.0f) || !(bend_v >= 0.0f) || !std::isfinite(bend_u) || !std::isfinite(bend_v))
         throw InvalidInput("hinge bending: bending rigidity must be finite and >= 0");
     Vec u{axis_u[0], axis_u[1], axis_u[2]};
     const double lu = norm(u);
-    if (!(lu > 0.0) || !std::isfinite(lu)) throw InvalidInput("hinge bending: the u axis must be a non-zero vector");
+    if (!(lu > 0.0) || !std::isfinite(lu))
+        throw InvalidInput("hinge bending: the u axis must be a non-zero vector");
     u = {u[0] / lu, u[1] / lu, u[2] / lu};
     const auto pos = [&](std::uint32_t i) { return Vec{x[i], y[i], z[i]}; };
     // cot of the angle between a and b
@@ -83,13 +93,14 @@ std::vector<BendElement> hinge_bending_elements(std::span<const float> x, std::s
         const std::uint32_t i0 = h0.a, i1 = h0.b, i2 = h0.opposite, i3 = h1.opposite;
         const Vec x0 = pos(i0), x1 = pos(i1), x2 = pos(i2), x3 = pos(i3);
         const Vec e0 = sub(x1, x0), e1 = sub(x2, x0), e2 = sub(x3, x0), e3 = sub(x2, x1), e4 = sub(x3, x1);
-        const Vec n0 = cross(e0, e1), n1 = cross(e0, e2); // x2 and x3 lie on opposite sides: n1 ~ -n0 when flat
+        const Vec n0 = cross(e0, e1),
+                  n1 = cross(e0, e2); // x2 and x3 lie on opposite sides: n1 ~ -n0 when flat
         const double a0 = 0.5 * norm(n0), a1 = 0.5 * norm(n1);
         if (!(a0 > 0.0) || !(a1 > 0.0)) return;
         const Vec me0{-e0[0], -e0[1], -e0[2]};
         const double c01 = cot(e0, e1), c02 = cot(e0, e2), c03 = cot(me0, e3), c04 = cot(me0, e4);
-        // Direction of bending: in the rest plane, perpendicular to the edge (normal n0 - n1, the two triangles'
-        // normals made to agree).
+        // Direction of bending: in the rest plane, perpendicular to the edge (normal n0 - n1, the two
+        // triangles' normals made to agree).
         const Vec n = sub(n0, n1);
         Vec p = cross(n, e0);
         const double lp = norm(p);
@@ -103,8 +114,8 @@ std::vector<BendElement> hinge_bending_elements(std::span<const float> x, std::s
         e.v = {i0, i1, i2, i3};
         e.c = {float(c03 + c04), float(c01 + c02), float(-c01 - c03), float(-c02 - c04)};
         e.weight = float(bend / (a0 + a1));
-        if (!std::isfinite(e.weight) || !std::isfinite(e.c[0]) || !std::isfinite(e.c[1]) || !std::isfinite(e.c[2]) ||
-            !std::isfinite(e.c[3]))
+        if (!std::isfinite(e.weight) || !std::isfinite(e.c[0]) || !std::isfinite(e.c[1]) ||
+            !std::isfinite(e.c[2]) || !std::isfinite(e.c[3]))
             return;
         out.push_back(e);
     });
