@@ -149,12 +149,15 @@ SceneBuild build_hang_scene(const HangParams& p) {
             for (std::size_t s2 = 0; s2 < GridStencil::slot_count; ++s2) {
                 const int ni = static_cast<int>(i) + slots[s2].di, nj = static_cast<int>(j) + slots[s2].dj;
                 if (ni < 0 || nj < 0 || ni >= N || nj >= N) continue;
+                if (fabric && slots[s2].kind == SpringKind::bend) continue; // no bend springs: bending replaces them
                 bits |= 1u << s2;
-                if (fabric && slots[s2].kind == SpringKind::bend) continue; // neighbour bit only (bending reads it)
                 // Fabric: assembled per cell, a structural edge on the boundary (one adjacent cell) gets half.
                 const bool half = fabric && slots[s2].kind == SpringKind::structural &&
                                   (slots[s2].dj == 0 ? edge_row : edge_column);
-                if (half) bits |= 1u << (GridStencil::half_bit + s2);
+                if (half) {
+                    bits |= 1u << (GridStencil::half_bit + s2);
+                    g.half_edges = true;
+                }
                 if (g.offset[s2] > 0)
                     edges.push_back({k, static_cast<std::uint32_t>(static_cast<int>(k) + g.offset[s2]), slots[s2].kind,
                                      g.rest[s2], half ? 0.5f * g.scale[s2] : g.scale[s2]});

@@ -43,8 +43,7 @@ struct GridStencil {
     std::array<float, slot_count> rest{};           ///< rest length, m
     std::array<float, slot_count> scale{1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1}; ///< Edge::scale of the slot's springs
     /// Per particle:
-    ///   bit s (0..11)        slot s's spring exists (springs model; in the fabric model the four bend slots
-    ///                        +-2, +-2N carry no spring, so their bit says the neighbour exists: bending reads it);
+    ///   bit s (0..11)        slot s's spring exists (in the fabric model the four bend slots +-2, +-2N carry none);
     ///   bit half_bit + s     slot s's spring has half the slot's stiffness (Edge::scale = scale[s] / 2: a membrane
     ///                        edge on the cloth's boundary, fabric model);
     ///   bits bend_u_bit + 0..2  the second difference along the row centred at the particle's left neighbour, at the
@@ -54,6 +53,9 @@ struct GridStencil {
     ///   bit edge_column_bit  its column is the first or last (its column elements have half weight).
     /// A twist element (cell cross difference) exists exactly where the cell's diagonal (shear-slot) spring does.
     AlignedArray<std::uint32_t> mask;
+    /// Some mask word has a half bit (the fabric model): the grid kernel must be GridFabric, which reads them, even
+    /// when the cloth has no bending.
+    bool half_edges = false;
     static constexpr std::uint32_t half_bit = 12, bend_u_bit = 24, bend_v_bit = 27, edge_row_bit = 30,
                                    edge_column_bit = 31;
 };
