@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <new>
 
+#include "drape/scene.hpp"
 #include "drape/strain_field.hpp"
 #include "drape/workers.hpp"
 #include "test_helpers.hpp"
@@ -133,6 +134,27 @@ TEST(NoAllocation, StrainFieldComputeDoesNotAllocate) {
         counting = false;
         EXPECT_EQ(allocations.load(), 0u) << (field.grid_path() ? "grid" : "general") << " path";
     }
+    });
+}
+
+// Triangle-mesh cloths with the fabric model (hinge bending through Q's rows, per-spring stiffness, seams, Rayleigh
+// damping, collisions with the body): the T-shirt.
+TEST(NoAllocation, FabricTShirtStepDoesNotAllocate) {
+    Workers workers(3);
+    workers.run([&] {
+        SceneSpec spec = load_scene("tshirt");
+        spec.model = MaterialModel::fabric;
+        spec.fabric.damping = 1e-5f;
+        BuiltScene b = build_scene(spec);
+        ASSERT_FALSE(b.cloth.bending.empty());
+        Simulation sim(std::move(b.cloth), b.initial, b.params);
+        sim.step(5); // warm-up
+        allocations = 0;
+        counting = true;
+        sim.step(100);
+        sim.step_serial(5);
+        counting = false;
+        EXPECT_EQ(allocations.load(), 0u);
     });
 }
 

@@ -20,8 +20,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "drape/bending.hpp"
 #include "drape/errors.hpp"
 #include "drape/stability.hpp"
+#include "drape/triangle_fabric.hpp"
 
 namespace drape {
 
@@ -38,6 +40,19 @@ std::string format_number(double v) {
     std::ostringstream out;
     out << v;
     return out.str();
+}
+
+/// Fabric model, mesh cloth: a warning when the OBJ is not flat (the hinge bending assumes a flat rest shape).
+void warn_curved_mesh(SceneSpec& s) {
+    if (s.model != MaterialModel::fabric || s.cloth != ClothType::mesh || !s.mesh.mesh) return;
+    const TriangleMesh& m = *s.mesh.mesh;
+    const std::vector<float> x(m.x.begin(), m.x.end()), y(m.y.begin(), m.y.end()), z(m.z.begin(), m.z.end());
+    const double angle = hinge_rest_angle_max(x, y, z, m.triangles) * 180.0 / 3.14159265358979323846;
+    if (angle > 1.0)
+        s.warnings.push_back(s.source + ": cloth.file: the mesh is not flat (neighbouring triangles meet at up to " +
+                             format_number(angle) +
+                             " degrees); the fabric model's bending (Bergou et al. 2006) takes the flat sheet as "
+                             "its rest shape, so curved parts of the mesh are pulled towards flat");
 }
 
 /// JSON paths ("cloth.n", "physics.gravity[1]") of numbers the file writes but a double cannot hold (1e400, a 400-digit
@@ -723,6 +738,7 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
     if (particles > (std::size_t{1} << 24))
         throw InvalidInput(source + ": the cloth would have " + std::to_string(particles) +
                            " particles; at most 16,777,216 are allowed");
+    warn_curved_mesh(s);
     return s;
 } catch (const json::exception& e) {
     throw InvalidInput(source + ": " + e.what());
@@ -812,19 +828,26 @@ std::size_t scene_particle_count(const SceneSpec& s) {
 
 namespace {
 
-/// Cooks an assembly (outline and mesh cloths): stiffness per kind as for the other cloths; the damping ratio uses
-/// the mean particle mass.
+/// Cooks an assembly (outline and mesh cloths; the T-shirt with the fabric model). Springs model: stiffness per kind as
+/// for the other cloths, the damping ratio uses the mean particle mass. Fabric model: triangle_fabric.hpp (membrane
+/// springs per edge, hinge bending, seams), the weave's u axis `axis_u`.
 void cook_assembly(const SceneSpec& s, const GarmentAssembly& a, const std::vector<float>& inv_mass,
-                   const std::vector<float>& free_inv_mass, BuiltScene& out) {
-    double total = 0.0;
-    for (float m : a.mass) total += m;
-    const float mean_mass = float(total / double(std::max<std::size_t>(1, a.particle_count())));
-    std::array<SpringMaterial, spring_kind_count> material{};
-    const float ks[4] = {s.stiffness, s.stiffness * s.shear_ratio, s.stiffness * s.bend_ratio, s.seam_stiffness};
-    for (int kind = 0; kind < 4; ++kind)
-        material[kind] = {ks[kind], s.damping_ratio * 2.0f * std::sqrt(ks[kind] * mean_mass * 0.5f)};
-    out.cloth = cook_cloth(inv_mass, a.edges, material);
-    out.cloth.triangles = a.triangles;
+                   const std::vector<float>& free_inv_mass, BuiltScene& out,
+                   const std::array<float, 3>& axis_u = {1.0f, 0.0f, 0.0f},
+                   WeaveAlignment alignment = WeaveAlignment::aligned) {
+    if (s.model == MaterialModel::fabric) {
+        out.cloth = cook_triangle_fabric(a, inv_mass, {s.fabric, axis_u, alignment});
+    } else {
+        double total = 0.0;
+        for (float m : a.mass) total += m;
+        const float mean_mass = float(total / double(std::max<std::size_t>(1, a.particle_count())));
+        std::array<SpringMaterial, spring_kind_count> material{};
+        const float ks[4] = {s.stiffness, s.stiffness * s.shear_ratio, s.stiffness * s.bend_ratio, s.seam_stiffness};
+        for (int kind = 0; kind < 4; ++kind)
+            material[kind] = {ks[kind], s.damping_ratio * 2.0f * std::sqrt(ks[kind] * mean_mass * 0.5f)};
+        out.cloth = cook_cloth(inv_mass, a.edges, material);
+        out.cloth.triangles = a.triangles;
+    }
     out.cloth.free_inv_mass = free_inv_mass;
     out.initial = a.initial_state();
 }
@@ -895,7 +918,7 @@ BuiltScene build_scene(const SceneSpec& s) {
             frame.origin[k] = -cu * frame.axis_u[k] - cv * frame.axis_v[k] - half_gap * normal[k];
         OutlinePanelParams op;
         op.spacing = o.spacing;
-        op.areal_density = o.density;
+        op.areal_density = s.model == MaterialModel::fabric ? s.fabric.density : o.density;
         GarmentAssembly a;
         // Panel errors the file could not be checked for before triangulating (an outline too thin for its
         // spacing) name the file and the fields.
@@ -934,14 +957,27 @@ BuiltScene build_scene(const SceneSpec& s) {
         if (!m.mesh) throw InvalidInput("mesh cloth: no mesh loaded (cloth.file)");
         GarmentAssembly a;
         // Positions relative to m.centre, the cloth's origin (Cloth::origin, set below).
-        add_mesh_panel(a, *m.mesh, {m.scale, {0.0f, 0.0f, 0.0f}, m.density});
+        add_mesh_panel(a, *m.mesh,
+                       {m.scale, {0.0f, 0.0f, 0.0f}, s.model == MaterialModel::fabric ? s.fabric.density : m.density});
         std::vector<float> inv_mass = a.inverse_masses();
         const std::vector<float> free_inv_mass = inv_mass;
         if (m.pins == MeshPins::top)
             for (std::uint32_t i : mesh_top_particles(*m.mesh)) inv_mass[i] = 0.0f;
         for (std::uint32_t v : m.pin_vertices) inv_mass[static_cast<std::size_t>(m.mesh->particle_of_vertex.at(v))] = 0.0f;
-        cook_assembly(s, a, inv_mass, free_inv_mass, out);
+        // An OBJ's edges need not follow any weave: the unaligned membrane (triangle_fabric.hpp); u = the file's x.
+        cook_assembly(s, a, inv_mass, free_inv_mass, out, {1.0f, 0.0f, 0.0f}, WeaveAlignment::unaligned);
         out.cloth.origin = {double(m.centre[0]), double(m.centre[1]), double(m.centre[2])};
+    } else if (s.model == MaterialModel::fabric) {
+        // Fabric: node masses from the fabric's density and the panels' triangles (TShirtParams::total_mass is not
+        // used); a particle in no triangle gets a third of a half cell. Both panels' u is +-x (mask columns).
+        TShirtBuild t = build_tshirt(s.tshirt);
+        GarmentAssembly& a = t.assembly;
+        const std::vector<double> m = lumped_masses(a.x, a.y, a.z, a.triangles, s.fabric.density);
+        const double lone = double(s.fabric.density) * t.spacing * t.spacing / 6.0;
+        for (std::size_t i = 0; i < a.particle_count(); ++i) a.mass[i] = float(m[i] > 0.0 ? m[i] : lone);
+        const std::vector<float> inv_mass = a.inverse_masses();
+        cook_assembly(s, a, inv_mass, inv_mass, out);
+        out.cloth.free_inv_mass.clear();
     } else {
         const TShirtBuild t = build_tshirt(s.tshirt);
         const GarmentAssembly& a = t.assembly;

@@ -13,6 +13,8 @@
 // edge of three or more triangles (non-manifold) keeps its structural spring but gets no bend spring. No shear
 // springs: a triangle has no diagonal to shear along (the structural springs of a triangle already resist shear).
 // Masses: areal density x triangle area, lumped one third to each of its vertices.
+// (Springs material model. With a fabric, scenes cook the mesh with triangle_fabric.hpp instead: membrane springs from
+// the fabric, hinge bending, the fabric's density.)
 #pragma once
 
 #include <array>
