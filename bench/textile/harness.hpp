@@ -1,0 +1,80 @@
+// Textile test harness (bench/textile, tests/test_textile.cpp): builds a grid cloth with the fabric model through
+// build_hang_scene, holds it as a standard test does (a clamp, a load, a disc), settles it with air drag, and
+// measures what the test measures. Shared by the drape_textile bench program and the cheap ctest versions.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "drape/fabric.hpp"
+#include "drape/simulation.hpp"
+
+namespace drape::textile {
+
+/// Fabrics the harness uses: the presets (find_fabric) when they exist, else the harness's own figures.
+Fabric textile_fabric(const std::string& name);
+
+/// Velocity of particle i, m/s, whatever the integrator stores (the one place that reads integrator state).
+std::array<float, 3> particle_velocity(const Simulation& sim, std::size_t i);
+
+/// How a run was settled: simulated time, substeps, wall time, final speed.
+struct SettleStats {
+    double sim_time = 0.0;    ///< s
+    std::size_t steps = 0;
+    double wall = 0.0;        ///< s
+    double dt = 0.0;          ///< s
+    float max_speed = 0.0f;   ///< m/s at the end
+    bool settled = false;     ///< max speed fell below the tolerance before the time limit
+};
+
+/// Steps until the fastest particle is slower than `speed_tol` (m/s) at `checks_needed` checks in a row (checks every
+/// `check_every` s of simulated time), or `max_time` s.
+SettleStats settle(Simulation& sim, double max_time, double speed_tol, double check_every = 0.01,
+                   int checks_needed = 3);
+
+// --- Peirce cantilever (ASTM D1388) ------------------------------------------------------------------------------
+struct CantileverCase {
+    Fabric fabric;
+    double overhang = 0.04; ///< l, m (a multiple of the spacing)
+    double spacing = 0.01;  ///< h, m
+    bool along_v = false;   ///< false: the strip runs along u (warp, bend_u); true: along v (weft, bend_v)
+    int clamp_rows = 2;     ///< columns (rows) held: the last one is the clamp line, the one before fixes the slope
+    double drag = -1.0;     ///< air drag, 1/s; < 0: critical for the strip's first mode, 2 w1
+    double max_time = 20.0; ///< s
+};
+struct CantileverResult {
+    std::uint32_t n = 0;           ///< grid side (particles)
+    std::size_t particles = 0;
+    double c_input = 0.0;          ///< (B / (w g))^(1/3), m
+    double theta = 0.0;            ///< chord angle clamp -> tip, rad
+    double c_peirce = 0.0;         ///< from theta by Peirce's relation, m
+    double c_elastica = 0.0;       ///< from theta by the exact elastica, m
+    double theta_reference = 0.0;  ///< the elastica's chord angle for c_input, rad
+    double shape_error = 0.0;      ///< max distance of a node (column mean) from the elastica at its arc length / l
+    double tip_x = 0.0, tip_y = 0.0, ref_tip_x = 0.0, ref_tip_y = 0.0; ///< m, from the clamp
+    SettleStats settle;
+};
+CantileverResult run_cantilever(const CantileverCase& c);
+
+// --- Uniaxial tension -------------------------------------------------------------------------------------------
+struct TensionCase {
+    Fabric fabric;
+    double length = 0.1;   ///< m, the square strip's side
+    double spacing = 0.01; ///< m
+    bool along_v = false;
+    double strain = 0.01;  ///< target strain from the end load T = strain * stretch (N/m)
+    double max_time = 5.0;
+};
+struct TensionResult {
+    std::uint32_t n = 0;
+    double tension = 0.0;          ///< end load per unit width, N/m
+    double expected_strain = 0.0;  ///< end load plus the strip's own weight along the load, over the stiffness
+    double measured_strain = 0.0;  ///< mean displacement of the loaded row / length
+    double lateral_strain = 0.0;   ///< change of the loaded row's width / width (Poisson contraction)
+    SettleStats settle;
+};
+TensionResult run_tension(const TensionCase& c);
+
+} // namespace drape::textile
