@@ -69,11 +69,13 @@ SettleStats settle(Simulation& sim, double max_time, double speed_tol, double ch
 }
 
 CantileverResult run_cantilever(const CantileverCase& c) {
-    const double h = c.spacing, l = c.overhang;
+    const double h = c.spacing;
     const int k = c.clamp_rows - 1;
-    const auto cells = static_cast<std::uint32_t>(std::lround(l / h));
-    if (cells < 1 || std::fabs(cells * h - l) > 1e-9 || k < 1) throw std::invalid_argument("cantilever: l / h");
+    const auto cells = static_cast<std::uint32_t>(std::max(1L, std::lround(c.overhang / h - 0.5)));
+    if (k < 1) throw std::invalid_argument("cantilever: clamp_rows >= 2");
+    const double l = (cells + 0.5) * h;
     CantileverResult r;
+    r.overhang = l;
     const double B = c.along_v ? c.fabric.bend_v : c.fabric.bend_u, rho = c.fabric.density;
     r.c_input = bending_length(B, rho, g0);
 
@@ -112,8 +114,11 @@ CantileverResult run_cantilever(const CantileverCase& c) {
         along /= n;
         up /= n;
     };
-    double a0, y0;
-    mean_at(static_cast<std::uint32_t>(k), a0, y0);
+    double a0, y0, a1, y1; // the clamp line: midpoint of the last held segment
+    mean_at(static_cast<std::uint32_t>(k - 1), a0, y0);
+    mean_at(static_cast<std::uint32_t>(k), a1, y1);
+    a0 = 0.5 * (a0 + a1);
+    y0 = 0.5 * (y0 + y1);
     const ElasticaShape ref = solve_elastica(l, r.c_input);
     r.ref_tip_x = ref.tip_x();
     r.ref_tip_y = ref.tip_y();
@@ -121,7 +126,7 @@ CantileverResult run_cantilever(const CantileverCase& c) {
     for (std::uint32_t a = static_cast<std::uint32_t>(k); a < n; ++a) {
         double along, up, rx, ry;
         mean_at(a, along, up);
-        ref.at((a - k) * h, rx, ry);
+        ref.at((a - k + 0.5) * h, rx, ry);
         r.shape_error = std::max(r.shape_error, std::hypot(along - a0 - rx, up - y0 - ry) / l);
         if (a == n - 1) {
             r.tip_x = along - a0;
@@ -131,6 +136,8 @@ CantileverResult run_cantilever(const CantileverCase& c) {
     r.theta = std::atan2(-r.tip_y, r.tip_x);
     r.c_peirce = peirce_bending_length(l, r.theta);
     r.c_elastica = r.theta > 0.0 ? elastica_bending_length(l, r.theta) : 0.0;
+    const double theta_last = std::atan2(-(r.tip_y - (y1 - y0)), r.tip_x - (a1 - a0));
+    r.c_last_row = theta_last > 0.0 ? elastica_bending_length(cells * h, theta_last) : 0.0;
     return r;
 }
 

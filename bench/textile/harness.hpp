@@ -37,20 +37,27 @@ SettleStats settle(Simulation& sim, double max_time, double speed_tol, double ch
 // --- Peirce cantilever (ASTM D1388) ------------------------------------------------------------------------------
 struct CantileverCase {
     Fabric fabric;
-    double overhang = 0.04; ///< l, m (a multiple of the spacing)
+    /// Wanted overhang, m: the strip gets the whole number of cells m that brings l = (m + 1/2) h nearest to it.
+    double overhang = 0.04;
     double spacing = 0.01;  ///< h, m
     bool along_v = false;   ///< false: the strip runs along u (warp, bend_u); true: along v (weft, bend_v)
-    int clamp_rows = 2;     ///< columns (rows) held: the last one is the clamp line, the one before fixes the slope
+    /// Columns (rows) held. A held segment fixes the slope; the clamp line is the midpoint of the last held segment
+    /// (a segment's direction is the slope at its midpoint to second order), so the overhang is l = (m + 1/2) h for
+    /// m free cells. (Taking the last held row as the clamp makes the strip effectively h/2 longer: a first-order
+    /// error, reported as c_last_row.)
+    int clamp_rows = 2;
     double drag = -1.0;     ///< air drag, 1/s; < 0: critical for the strip's first mode, 2 w1
     double max_time = 20.0; ///< s
 };
 struct CantileverResult {
     std::uint32_t n = 0;           ///< grid side (particles)
     std::size_t particles = 0;
+    double overhang = 0.0;         ///< l, m, from the clamp line to the tip
     double c_input = 0.0;          ///< (B / (w g))^(1/3), m
     double theta = 0.0;            ///< chord angle clamp -> tip, rad
     double c_peirce = 0.0;         ///< from theta by Peirce's relation, m
     double c_elastica = 0.0;       ///< from theta by the exact elastica, m
+    double c_last_row = 0.0;       ///< the same with the clamp at the last held row (l = m h), m
     double theta_reference = 0.0;  ///< the elastica's chord angle for c_input, rad
     double shape_error = 0.0;      ///< max distance of a node (column mean) from the elastica at its arc length / l
     double tip_x = 0.0, tip_y = 0.0, ref_tip_x = 0.0, ref_tip_y = 0.0; ///< m, from the clamp
