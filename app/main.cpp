@@ -1,5 +1,6 @@
 // The `drape` executable: command-line front end.
 //   drape run ...   headless run of a scene with machine-readable figures (see run_command.hpp)
+//   drape materials the fabric presets in file units (see materials.hpp)
 //   drape view ...  the real-time viewer (see view_command.hpp); `drape` with no arguments opens it
 // Exit codes (drape::exit_code, docs/user_guide.md): 0 ok, 1 internal error, 2 bad input (one line naming the flag
 // or file field and its allowed range), 3 simulation became non-finite, 4 blow-up, 5 an output could not be written.
@@ -16,6 +17,7 @@
 
 #include "drape/errors.hpp"
 #include "drape/scene_hang.hpp"
+#include "materials.hpp"
 #include "run_command.hpp"
 #include "view_command.hpp"
 
@@ -85,10 +87,15 @@ int main(int argc, char** argv) {
         ->check(in_range<double>(1e-9, 0.1, " s"));
     cmd->add_option("--integrator", run.integrator, "Time integrator: euler or verlet [default: the scene's]")
         ->check(CLI::IsMember({"euler", "verlet"}));
+    cmd->add_option("--material", run.material,
+                    "Material: a fabric preset (silk, cotton_shirting, jersey, linen, wool, denim, ...; see drape "
+                    "materials), switching the cloth to the fabric model, or springs (the seeds' spring model with "
+                    "the scene's spring fields) [default: the scene's]");
     cmd->add_option("--stiffness", run.stiffness,
-                    "Structural spring stiffness k in N/m (shear and bend follow the scene's ratios) [scene: 1000]")
+                    "Spring model: structural spring stiffness k in N/m (shear and bend follow the scene's ratios) "
+                    "[scene: 1000]")
         ->check(in_range<float>(100.0f, 25000.0f, " N/m"));
-    cmd->add_option("--damping", run.damping, "Spring damping as a fraction of critical damping [scene's]")
+    cmd->add_option("--damping", run.damping, "Spring model: spring damping as a fraction of critical damping [scene's]")
         ->check(in_range<float>(0.0f, 1.0f));
     cmd->add_option("--drag", run.drag, "Air drag kr in 1/s (F = -m kr v) [scene's]")
         ->check(in_range<float>(0.0f, 100.0f, " 1/s"));
@@ -117,6 +124,11 @@ int main(int argc, char** argv) {
     cmd->add_flag("--staged", run.staged, "Run each stage as its own pass instead of the fused pass");
     cmd->add_flag("--json", run.json, "Print exactly one JSON object on stdout");
 
+    bool materials_json = false;
+    CLI::App* materials_cmd = app.add_subcommand("materials", "List the fabric presets with their figures in file "
+                                                              "units (g/m^2, N/m, micro-N*m, s) and sources.");
+    materials_cmd->add_flag("--json", materials_json, "Print one JSON array (each preset with its source)");
+
     drape::app::ViewOptions view;
     CLI::App* view_cmd = app.add_subcommand("view", "Real-time viewer: drag the cloth, pin particles, edit fabric, "
                                                     "physics and lighting in panels (the default with no arguments). "
@@ -124,6 +136,8 @@ int main(int argc, char** argv) {
     view_cmd->add_option("--scene", view.scene,
                          "Built-in scene (hang, drape, sphere, flag, tshirt) or a scene file (.json)")
         ->capture_default_str();
+    view_cmd->add_option("--material", view.material,
+                         "A fabric preset (see drape materials) or springs, instead of the scene's material");
     view_cmd->add_option("--size", view.size,
                          "Grid scenes: particles per side N (N x N) [hang: 64, others: the scene's]; tshirt: cells "
                          "per metre [10, 1000]")
@@ -199,6 +213,7 @@ int main(int argc, char** argv) {
 
     try {
         if (cmd->parsed()) return drape::app::run_command(run);
+        if (materials_cmd->parsed()) return drape::app::materials_command(materials_json);
         // `drape view`, or `drape` alone: the viewer.
         view.vsync = !no_vsync;
         view.ui = !no_ui;

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "drape/memory_estimate.hpp"
+#include "materials.hpp"
 #include "drape/scene.hpp"
 #include "obj_export.hpp"
 #include "drape/simulation.hpp"
@@ -104,6 +105,13 @@ int run_command(const RunOptions& o) {
             spec.tshirt.cells_per_metre = static_cast<float>(*o.size);
         }
     }
+    if (o.material) apply_material_flag(spec, *o.material);
+    // --stiffness and --damping are the spring model's: refused (not silently dropped) for a fabric.
+    for (const auto& [given, flag] : {std::pair{o.stiffness.has_value(), "--stiffness"}, {o.damping.has_value(), "--damping"}})
+        if (given && spec.model == MaterialModel::fabric)
+            throw InvalidInput(std::string(flag) + ": a spring-model flag, but the material is the fabric '" +
+                               spec.fabric.name + "'" + (o.material ? " (--material)" : " (the scene's)") +
+                               "; add --material springs for the seeds' spring model");
     if (o.stiffness) spec.stiffness = *o.stiffness;
     if (o.damping) spec.damping_ratio = *o.damping;
     if (o.drag) spec.physics.air_drag = *o.drag;
@@ -201,7 +209,8 @@ int run_command(const RunOptions& o) {
     j["integrator"] = integrator_name(sp.integrator);
     j["kernel"] = kernel_path_name(sim.kernel());
     j["fused"] = sp.fused;
-    j["stiffness"] = spec.stiffness;
+    if (spec.model == MaterialModel::springs) j["stiffness"] = spec.stiffness;
+    j["material"] = material_report(spec, sim.cloth());
     j["wind"] = sp.wind.enabled;
     j["aero"] = sp.aero.enabled;
     j["strain_limit"] = sp.strain_limit.ratio;
@@ -246,6 +255,15 @@ int run_command(const RunOptions& o) {
                     integrator_name(sp.integrator), format_dt(sp.dt).c_str(),
                     dt_default ? "default" : o.dt ? "--dt" : "scene's physics.dt", format_dt(bound.dt_max).c_str(),
                     static_cast<unsigned long long>(done), sim.time());
+        const DerivedMaterial d = derive_material(sim.cloth());
+        if (spec.model == MaterialModel::fabric)
+            std::printf("  material: fabric '%s' (%.4g g/m^2); derived node mass %.4g g, spring k structural %.4g, "
+                        "shear %.4g, bend %.4g N/m\n",
+                        spec.fabric.name.c_str(), double(spec.fabric.density) * fabric_gsm_per_kg_m2,
+                        d.node_mass_g_mean, double(d.stiffness[0]), double(d.stiffness[1]), double(d.stiffness[2]));
+        else
+            std::printf("  material: springs, node mass %.4g g, spring k structural %.4g, shear %.4g, bend %.4g N/m\n",
+                        d.node_mass_g_mean, double(d.stiffness[0]), double(d.stiffness[1]), double(d.stiffness[2]));
         std::printf("  wall %.3f s, %.4g particle-substeps/s\n", wall, rate);
         std::printf("  max structural strain %.4f, kinetic energy %.4g J, finite %s, checksum %s\n",
                     double(health.max_structural_strain), health.kinetic_energy,

@@ -16,6 +16,8 @@ struct RunOptions {
     std::optional<double> sim_seconds;
     std::optional<double> dt;
     std::optional<std::string> integrator;
+    /// A fabric preset (switches the scene to the fabric model) or "springs" (the seeds' spring model).
+    std::optional<std::string> material;
     std::optional<float> stiffness;
     std::optional<float> damping;
     std::optional<float> drag;

@@ -75,7 +75,8 @@ double median(std::vector<double> v) {
 
 Viewer::Viewer(const ViewOptions& options) : options_(options) {
     // The scene first: a bad --scene or --size is reported before any window opens.
-    session_ = std::make_unique<ViewSession>(options.scene, options.size, options.threads, options.substeps);
+    session_ = std::make_unique<ViewSession>(options.scene, options.size, options.threads, options.substeps,
+                                             options.material);
     show_ui_ = options.ui;
     scripted_mouse = options.demo_grab;
     full_mesh_ = options.full_mesh;

@@ -76,6 +76,9 @@ class Viewer {
     void ui_run_mode();
     void ui_scene_file();
     void ui_fabric();
+    void ui_fabric_material(); ///< fabric_panel.cpp: the fabric model's preset, figures and derived values
+    void ui_spring_material(); ///< the seeds' spring model: node mass, stiffness per kind, damping ratio
+    void ui_fabric_looks();    ///< colours, shading, strain colours
     void ui_physics();
     void ui_aero();
     void ui_lighting();

@@ -11,6 +11,7 @@ namespace drape::app {
 
 struct ViewOptions {
     std::string scene = "hang";        ///< built-in scene name or scene file (.json)
+    std::optional<std::string> material; ///< a fabric preset or "springs" instead of the scene's material
     std::optional<std::uint32_t> size; ///< particles per side (grid scenes) or cells per metre (T-shirt);
                                        ///< empty: the scene's own, 64 for "hang"
     int threads = 0;             ///< 0 = all hardware threads

@@ -10,6 +10,7 @@
 #include "drape/errors.hpp"
 #include "drape/memory_estimate.hpp"
 #include "drape/stability.hpp"
+#include "materials.hpp"
 
 namespace drape::app {
 
@@ -72,14 +73,20 @@ int ViewSession::hardware_threads() {
     return std::max(1, Workers::hardware());
 }
 
+bool same_figures(const Fabric& a, const Fabric& b) noexcept {
+    return a.density == b.density && a.stretch_u == b.stretch_u && a.stretch_v == b.stretch_v && a.shear == b.shear &&
+           a.bend_u == b.bend_u && a.bend_v == b.bend_v && a.damping == b.damping;
+}
+
 ViewSession::ViewSession(const std::string& scene, std::optional<std::uint32_t> size, int threads,
-                         std::optional<int> substeps) {
+                         std::optional<int> substeps, const std::optional<std::string>& material) {
     SceneSpec spec;
     try {
         spec = load_scene(scene);
     } catch (const InvalidInput& e) {
         throw InvalidInput(std::string("--scene: ") + e.what());
     }
+    if (material) apply_material_flag(spec, *material);
     try {
         workers_ = std::make_unique<Workers>(threads);
     } catch (const InvalidInput& e) {
@@ -136,6 +143,8 @@ ViewSession::Snapshot ViewSession::settings_for(SceneSpec spec, std::optional<st
     t.fabric.stiffness = {spec.stiffness, spec.stiffness * spec.shear_ratio, spec.stiffness * spec.bend_ratio,
                           spec.seam_stiffness};
     t.fabric.damping_ratio = spec.damping_ratio;
+    t.fabric.model = spec.model;
+    t.fabric.fabric = spec.fabric;
     // Node mass: the scene's total over its particles (set exactly in build(), once the count is known).
     t.fabric.node_mass_g = 1000.0f * t.total_mass / float(std::max<std::size_t>(1, scene_particle_count(spec)));
     t.params = spec.physics;
@@ -147,10 +156,15 @@ ViewSession::Snapshot ViewSession::settings_for(SceneSpec spec, std::optional<st
 }
 
 std::array<SpringMaterial, spring_kind_count> ViewSession::materials(const FabricSettings& f) {
+    std::array<SpringMaterial, spring_kind_count> out{};
+    if (f.model == MaterialModel::fabric) { // as the builder derived them (the seam stiffness is the user's)
+        for (std::size_t k = 0; k < spring_kind_count; ++k)
+            out[k] = {f.stiffness[k], f.derived_damping[k]};
+        return out;
+    }
     // Damping as a fraction of the critical damping of one spring between two particles: kd = r * 2 sqrt(k m
     // / 2), the same rule the scenes use, so the damping means the same at any resolution and node mass.
     const float m = f.node_mass_g * 1e-3f;
-    std::array<SpringMaterial, spring_kind_count> out{};
     for (std::size_t k = 0; k < spring_kind_count; ++k)
         out[k] = {f.stiffness[k], f.damping_ratio * 2.0f * std::sqrt(f.stiffness[k] * m * 0.5f)};
     return out;
@@ -169,8 +183,11 @@ double ViewSession::bound_for(const FabricSettings& f, float air_drag, const Aer
         probe.size = spec_.grid.size * float(probe.n - 1) / float(std::max<std::uint32_t>(size_, 2) - 1);
         probe.total_mass = f.node_mass_g * 1e-3f * float(probe.n * probe.n);
         probe.pins = GridPins::none;
+        // A fabric: the builder derives the probe's every term (springs, bending, damping) as for the cloth.
+        probe.model = f.model;
+        probe.fabric = f.fabric;
         SceneBuild s = build_hang_scene(probe);
-        apply_materials(s.cloth, materials(f));
+        if (f.model == MaterialModel::springs) apply_materials(s.cloth, materials(f));
         return stability_bound(s.cloth, p).dt_max;
     }
     // Other cloths: the bound over a copy of the topology with every particle movable (pinned ones too: they
@@ -181,8 +198,9 @@ double ViewSession::bound_for(const FabricSettings& f, float air_drag, const Aer
     probe.padded_count = c.padded_count;
     probe.inv_mass.reset(c.padded_count);
     const float inv = 1.0f / (f.node_mass_g * 1e-3f);
+    const bool own_masses = f.model == MaterialModel::fabric && c.free_inv_mass.size() == c.particle_count;
     for (std::size_t i = 0; i < c.particle_count; ++i)
-        probe.inv_mass[i] = inv;
+        probe.inv_mass[i] = own_masses ? c.free_inv_mass[i] : inv;
     probe.edges = c.edges;
     probe.triangles = c.triangles;
     probe.material = materials(f);
@@ -196,26 +214,41 @@ int ViewSession::auto_substep_count(double dt) const {
 ViewSession::Built ViewSession::build(Snapshot t, const KeepState* keep_state, bool keep_frame_time) {
     SceneSpec spec = sized_spec(t.spec, t.size);
     const std::size_t count = scene_particle_count(spec);
-    if (spec.cloth == ClothType::grid)
-        spec.grid.total_mass = t.fabric.node_mass_g * 1e-3f * float(count);
-    else
-        spec.tshirt.total_mass = std::clamp(t.fabric.node_mass_g * 1e-3f * float(count), 0.001f, 10.0f);
-    spec.stiffness = t.fabric.stiffness[0];
-    spec.damping_ratio = t.fabric.damping_ratio;
+    const bool fabric = t.fabric.model == MaterialModel::fabric;
+    spec.model = t.fabric.model;
+    spec.fabric = t.fabric.fabric;
+    spec.seam_stiffness = t.fabric.stiffness[static_cast<std::size_t>(SpringKind::seam)];
+    if (!fabric) {
+        if (spec.cloth == ClothType::grid)
+            spec.grid.total_mass = t.fabric.node_mass_g * 1e-3f * float(count);
+        else
+            spec.tshirt.total_mass = std::clamp(t.fabric.node_mass_g * 1e-3f * float(count), 0.001f, 10.0f);
+        spec.stiffness = t.fabric.stiffness[0];
+        spec.damping_ratio = t.fabric.damping_ratio;
+    }
     BuiltScene scene = build_scene(spec);
     Cloth& cloth = scene.cloth;
-    // The exact node mass now that the count is known (the T-shirt's estimate may differ).
-    t.fabric.node_mass_g = 1000.0f * spec_total_mass(spec) / float(cloth.particle_count);
-    apply_materials(cloth, materials(t.fabric));
-    // Pins authored by the scene become user pins: they get the node mass back and are pinned after
+    if (fabric) {
+        // The builder derived every per-element value from the fabric and the mesh: shown, not imposed.
+        const DerivedMaterial d = derive_material(cloth);
+        t.fabric.node_mass_g = static_cast<float>(d.node_mass_g_mean);
+        t.fabric.stiffness = d.stiffness;
+        t.fabric.derived_damping = d.damping;
+    } else {
+        // The exact node mass now that the count is known (the T-shirt's estimate may differ).
+        t.fabric.node_mass_g = 1000.0f * spec_total_mass(spec) / float(cloth.particle_count);
+        apply_materials(cloth, materials(t.fabric));
+    }
+    // Pins authored by the scene become user pins: they get their mass back and are pinned after
     // construction, so every pin the user sees can be unpinned (the core restores an unpinned particle's
     // authored mass).
     std::vector<std::uint32_t> authored;
     const float inv = 1.0f / (t.fabric.node_mass_g * 1e-3f);
+    const bool own_masses = fabric && cloth.free_inv_mass.size() == cloth.particle_count;
     for (std::size_t i = 0; i < cloth.particle_count; ++i)
         if (cloth.inv_mass[i] == 0.0f) {
             authored.push_back(static_cast<std::uint32_t>(i));
-            cloth.inv_mass[i] = inv;
+            cloth.inv_mass[i] = own_masses ? cloth.free_inv_mass[i] : inv;
         }
     t.has_seams = false;
     for (const Edge& e : cloth.edges)
@@ -735,6 +768,11 @@ bool ViewSession::apply_physics(const Candidate& next, const std::string& what, 
 }
 
 void ViewSession::set_stiffness(SpringKind kind, float k) {
+    if (fabric_.model == MaterialModel::fabric && kind != SpringKind::seam) {
+        post(MessageLevel::warning, std::string("refused: the fabric model derives the ") + spring_kind_name(kind) +
+                                        " springs from the fabric; edit its figures, or switch the model to springs");
+        return;
+    }
     k = std::clamp(k, view_min_stiffness, view_max_stiffness);
     Candidate c{fabric_, sim_->params().air_drag, sim_->params().aero};
     c.fabric.stiffness[static_cast<std::size_t>(kind)] = k;
@@ -744,6 +782,11 @@ void ViewSession::set_stiffness(SpringKind kind, float k) {
 }
 
 void ViewSession::set_damping_ratio(float ratio) {
+    if (fabric_.model == MaterialModel::fabric) {
+        post(MessageLevel::warning, "refused: the fabric model's damping is the fabric's (s, Rayleigh beta); edit it "
+                                    "there, or switch the model to springs");
+        return;
+    }
     ratio = std::clamp(ratio, 0.0f, 1.0f);
     Candidate c{fabric_, sim_->params().air_drag, sim_->params().aero};
     c.fabric.damping_ratio = ratio;
@@ -778,8 +821,15 @@ void ViewSession::set_aero(const AeroWind& aero) {
 }
 
 void ViewSession::set_node_mass(float grams) {
+    if (fabric_.model == MaterialModel::fabric) {
+        post(MessageLevel::warning, "refused: a fabric's node mass follows its areal density (g/m^2) and the mesh; "
+                                    "edit the density, or switch the model to springs");
+        return;
+    }
     grams = std::clamp(grams, view_min_node_mass_g, view_max_node_mass_g);
-    const double bound = bound_for({grams, fabric_.stiffness, fabric_.damping_ratio}, params_.air_drag, params_.aero);
+    FabricSettings next = fabric_;
+    next.node_mass_g = grams;
+    const double bound = bound_for(next, params_.air_drag, params_.aero);
     const double old_dt = sim_->params().dt;
     double new_dt = (auto_dt_ || old_dt > bound) ? 0.9 * bound : old_dt;
     int new_substeps = substeps_;
@@ -804,6 +854,59 @@ void ViewSession::set_node_mass(float grams) {
     // The motion continues from here (after an error: from the scene's start).
     if (error_.empty()) r.keep = capture_state();
     request(std::move(r));
+}
+
+void ViewSession::set_material_model(MaterialModel model) {
+    if (model == fabric_.model || busy("material model")) return;
+    Request r;
+    r.what = std::string("material model ") + material_model_name(model);
+    r.target = snapshot();
+    FabricSettings& f = r.target.fabric;
+    f.model = model;
+    if (model == MaterialModel::fabric) {
+        f.fabric = spec_.model == MaterialModel::fabric ? spec_.fabric : *find_fabric("cotton_shirting");
+    } else { // the scene's spring fields, at the scene's total mass
+        const SceneSpec& sp = spec_;
+        f.stiffness = {sp.stiffness, sp.stiffness * sp.shear_ratio, sp.stiffness * sp.bend_ratio, sp.seam_stiffness};
+        f.damping_ratio = sp.damping_ratio;
+        f.node_mass_g =
+            1000.0f * total_mass_ / float(std::max<std::size_t>(1, scene_particle_count(sized_spec(spec_, size_))));
+    }
+    r.target.params = sim_->params();
+    r.keep_frame_time = true;
+    if (error_.empty()) r.keep = capture_state();
+    request(std::move(r));
+}
+
+void ViewSession::set_fabric(const Fabric& fabric) {
+    if (busy("fabric")) return;
+    Fabric f = fabric;
+    if (const std::optional<Fabric> preset = find_fabric(f.name); !preset || !same_figures(*preset, f)) f.name = "custom";
+    try {
+        validate_fabric(f, "Fabric panel: fabric");
+    } catch (const InvalidInput& e) {
+        post(MessageLevel::warning, std::string("refused: ") + e.what());
+        return;
+    }
+    if (fabric_.model == MaterialModel::fabric && same_figures(f, fabric_.fabric)) return;
+    Request r;
+    r.what = "fabric " + f.name;
+    r.target = snapshot();
+    r.target.fabric.model = MaterialModel::fabric;
+    r.target.fabric.fabric = f;
+    r.target.params = sim_->params();
+    r.keep_frame_time = true; // the motion continues with the new fabric, like a node-mass change
+    if (error_.empty()) r.keep = capture_state();
+    request(std::move(r));
+}
+
+void ViewSession::set_fabric_preset(const std::string& name) {
+    const std::optional<Fabric> f = find_fabric(name);
+    if (!f) {
+        post(MessageLevel::warning, "refused: no fabric preset '" + name + "' (presets: " + fabric_preset_names() + ")");
+        return;
+    }
+    set_fabric(*f);
 }
 
 void ViewSession::set_gravity(const std::array<float, 3>& g) {
@@ -925,7 +1028,10 @@ void ViewSession::redo() {
 void ViewSession::apply_settings(const Snapshot& target, History history) {
     const Snapshot before = snapshot();
     const char* verb = history == History::undo ? "undo" : "redo";
-    const bool same_cloth = target.topology == topology_ && target.fabric.node_mass_g == fabric_.node_mass_g;
+    const bool same_cloth = target.topology == topology_ && target.fabric.node_mass_g == fabric_.node_mass_g &&
+                            target.fabric.model == fabric_.model &&
+                            (fabric_.model == MaterialModel::springs ||
+                             same_figures(target.fabric.fabric, fabric_.fabric));
     if (!same_cloth || !error_.empty()) {
         // Another scene, resolution or node mass (or a stopped simulation): rebuild with those settings, keeping
         // the motion when only the node mass differs.
@@ -1027,13 +1133,18 @@ SceneSpec ViewSession::current_spec() const {
                 std::clamp(fabric_.node_mass_g * 1e-3f * float(sim_->cloth().particle_count), 0.001f, 10.0f);
     }
     const std::array<float, spring_kind_count>& k = fabric_.stiffness;
-    spec.stiffness = k[0];
-    if (k[0] > 0.0f) {
-        spec.shear_ratio = k[static_cast<std::size_t>(SpringKind::shear)] / k[0];
-        spec.bend_ratio = k[static_cast<std::size_t>(SpringKind::bend)] / k[0];
-    }
+    spec.model = fabric_.model;
     spec.seam_stiffness = k[static_cast<std::size_t>(SpringKind::seam)];
-    spec.damping_ratio = fabric_.damping_ratio;
+    if (fabric_.model == MaterialModel::fabric) {
+        spec.fabric = fabric_.fabric; // the spring fields stay the scene's (not written for a fabric)
+    } else {
+        spec.stiffness = k[0];
+        if (k[0] > 0.0f) {
+            spec.shear_ratio = k[static_cast<std::size_t>(SpringKind::shear)] / k[0];
+            spec.bend_ratio = k[static_cast<std::size_t>(SpringKind::bend)] / k[0];
+        }
+        spec.damping_ratio = fabric_.damping_ratio;
+    }
     const std::vector<Collider> colliders = spec_.physics.colliders; // the scene's own (a body is spec.body)
     spec.physics = params_;
     spec.physics.colliders = colliders;

@@ -65,12 +65,20 @@ inline constexpr std::size_t view_confirm_particles = 1u << 20;
 inline constexpr std::size_t view_undo_depth = 64;
 
 /// What the Fabric panel edits (physics part; colours live in render::Shading).
+/// Springs model: node mass, per-kind stiffness and damping ratio are the user's. Fabric model: `fabric` is the
+/// user's (physical units, docs/fabric.md); node_mass_g, stiffness and derived_damping are what the builder derived
+/// from it and the mesh (shown read-only), except the seam stiffness, which stays the user's.
 struct FabricSettings {
-    float node_mass_g = 0.0f; ///< g per particle
+    float node_mass_g = 0.0f; ///< g per particle (fabric model: the mean over the free particles)
     /// N/m per spring kind: structural, shear, bend, seam (seams only on sewn garments)
     std::array<float, spring_kind_count> stiffness{1000.0f, 500.0f, 100.0f, 1000.0f};
     float damping_ratio = 0.05f; ///< spring damping as a fraction of critical damping of one spring (0..1)
+    MaterialModel model = MaterialModel::springs;
+    Fabric fabric;
+    std::array<float, spring_kind_count> derived_damping{}; ///< fabric model: N*s/m per kind, as built
 };
+/// Whether two fabrics have the same figures (the name aside).
+bool same_figures(const Fabric& a, const Fabric& b) noexcept;
 
 enum class MessageLevel { info, warning, error };
 
@@ -105,11 +113,12 @@ class ViewSession {
     /// Loads a built-in scene by name or a scene file (.json) and builds it. size: particles per side of a
     /// grid scene or cells per metre of the T-shirt (empty: the scene's own; "hang": view_default_hang_size).
     /// threads 0 = all hardware threads; substeps empty = automatic. Throws InvalidInput naming the flag.
+    /// material: a fabric preset or "springs" replacing the scene's material (`drape view --material`).
     ViewSession(const std::string& scene, std::optional<std::uint32_t> size, int threads,
-                std::optional<int> substeps);
-    /// Shorthand for scene "hang" of size x size particles (tests).
+                std::optional<int> substeps, const std::optional<std::string>& material = std::nullopt);
+    /// Shorthand for scene "hang" of size x size particles with the seeds' spring model (tests).
     ViewSession(std::uint32_t size, int threads, std::optional<int> substeps)
-        : ViewSession("hang", size, threads, substeps) {}
+        : ViewSession("hang", size, threads, substeps, std::string("springs")) {}
     /// Waits for a build in progress (its result is discarded).
     ~ViewSession();
     ViewSession(const ViewSession&) = delete;
@@ -197,7 +206,16 @@ class ViewSession {
     void set_stiffness(SpringKind kind, float k);
     void set_damping_ratio(float ratio);
     /// Rebuilds the cloth with the new node mass, continuing from the current positions, velocities and pins.
+    /// Springs model only (a fabric's node mass follows its areal density).
     void set_node_mass(float grams);
+    /// Switches the material model, rebuilding the cloth and continuing its motion: springs takes the scene's
+    /// spring fields; fabric the scene's fabric (cotton_shirting when the scene has none).
+    void set_material_model(MaterialModel model);
+    /// The fabric (fabric model; switches to it), checked by validate_fabric: rebuilds in the background and
+    /// continues the motion. A refused fabric posts the field and its range and changes nothing.
+    void set_fabric(const Fabric& fabric);
+    /// A preset by name (fabric_presets()).
+    void set_fabric_preset(const std::string& name);
 
     // Physics.
     const SimulationParams& params() const noexcept { return sim_->params(); }

@@ -195,6 +195,29 @@ void Viewer::ui_scene_file() {
 void Viewer::ui_fabric() {
     ViewSession& s = *session_;
     ImGui::BeginDisabled(s.building());
+    int model = s.fabric().model == MaterialModel::fabric ? 0 : 1;
+    if (ImGui::Combo("model", &model, "fabric\0springs\0"))
+        s.set_material_model(model == 0 ? MaterialModel::fabric : MaterialModel::springs);
+    help_marker("fabric: a material in physical units (presets from published measurements, docs/fabric.md); the "
+                "engine derives the node mass and springs from it and the mesh. springs: the seeds' model, node mass "
+                "and per-spring stiffness set directly.");
+    if (s.fabric().model == MaterialModel::fabric) {
+        ui_fabric_material();
+        if (s.has_seams()) {
+            float v = 0.0f;
+            if (edit_float("seam k", s.fabric().stiffness[3], view_min_stiffness, view_max_stiffness, "%.0f N/m",
+                           log_flags, v))
+                s.set_stiffness(SpringKind::seam, v);
+        }
+    } else {
+        ui_spring_material();
+    }
+    ImGui::EndDisabled();
+    ui_fabric_looks();
+}
+
+void Viewer::ui_spring_material() {
+    ViewSession& s = *session_;
     ImGui::SliderFloat("node mass", &ui_node_mass_, view_min_node_mass_g, view_max_node_mass_g, "%.4f g", log_flags);
     if (ImGui::IsItemDeactivatedAfterEdit()) s.set_node_mass(ui_node_mass_);
     if (!ImGui::IsItemActive()) ui_node_mass_ = s.fabric().node_mass_g;
@@ -212,7 +235,9 @@ void Viewer::ui_fabric() {
     if (edit_float("damping", s.fabric().damping_ratio, 0.0f, 1.0f, "%.3f", clamp_flags, damping))
         s.set_damping_ratio(damping);
     help_marker("Spring damping as a fraction of the critical damping of one spring.");
-    ImGui::EndDisabled();
+}
+
+void Viewer::ui_fabric_looks() {
     colour_edit("colour", shading_.front_colour);
     ImGui::SameLine();
     ImGui::Checkbox("back colour", &shading_.back_colour_enabled);

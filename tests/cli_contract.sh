@@ -273,7 +273,7 @@ check_health() { # check_health "python condition on j" args...
     fi
 }
 check_health "j['healthy'] and j['strain_limit_honoured'] and j['strain_limit_max_stretch'] <= 0.011 and j['kinetic_energy'] < 1 and j['health']['energy_bound'] > 0" \
-    --size 32 --stiffness 100 --strain-limit 0.01 --sim-seconds 0.5
+    --size 32 --material springs --stiffness 100 --strain-limit 0.01 --sim-seconds 0.5
 cat >"$tmpdir/overlap.json" <<'JSON'
 { "cloth": {"type": "grid", "n": 20, "size": 1.0, "plane": "horizontal", "centre": [0, 0, 0], "pins": "none"},
   "material": {"damping_ratio": 0}, "physics": {"drag": 0},
@@ -286,6 +286,32 @@ check_health "j['healthy'] and j['finite'] and j['kinetic_energy'] < 0.49 and 'h
 # --sim-seconds converts to substeps of the default dt.
 "$DRAPE" run --size 20 --sim-seconds 0.05 --json >"$out" 2>"$err" || { echo "FAIL: --sim-seconds"; fail=1; }
 python3 -c "import json,sys; j=json.load(open('$out')); assert abs(j['sim_seconds']-0.05) < j['dt']+1e-9, j; print('ok: --sim-seconds ->', j['substeps'], 'substeps')" || fail=1
+
+# Materials: --material takes a fabric preset or springs; the spring flags are refused for a fabric; the run's JSON
+# reports the model, the fabric's figures and the derived per-element values; `drape materials` lists the presets.
+expect_error "--material: 'velvet' is not a material (fabric presets: silk, cotton_shirting" run --material velvet
+expect_error "--stiffness: a spring-model flag, but the material is the fabric 'denim'" run --material denim --stiffness 2000
+expect_error "add --material springs" run --scene hang --damping 0.1
+echo '{"cloth": {"type": "grid", "n": 8}, "material": {"fabric": "silk", "bend_u_uNm": -1}}' >"$tmpdir/bend.json"
+expect_error "bend.json: material.bend_u_uNm = -1 is outside the allowed range [0, 10000] micro-N*m" run --scene "$tmpdir/bend.json"
+echo '{"cloth": {"type": "grid", "n": 8}, "material": {"fabric": "silk", "stiffness": 2000}}' >"$tmpdir/mixed.json"
+expect_error "material.fabric is a fabric field but material.stiffness is a spring-model field" run --scene "$tmpdir/mixed.json"
+"$DRAPE" run --size 12 --material denim --steps 5 --json >"$out" 2>"$err" || { echo "FAIL: run --material denim"; cat "$err"; fail=1; }
+python3 - "$out" <<'PY' || fail=1
+import json, sys
+j = json.load(open(sys.argv[1]))
+m = j["material"]
+assert m["model"] == "fabric" and m["fabric"]["name"] == "denim", m
+assert abs(m["fabric"]["density_gsm"] - 270) < 1e-3 and m["fabric"]["bend_u_uNm"] > 0, m
+d = m["derived"]
+assert d["node_mass_g"] > 0 and all(k in d["spring_k"] for k in ("structural", "shear", "bend", "seam")), d
+print("ok: run --material denim ->", m["model"], m["fabric"]["name"], "node mass", d["node_mass_g"], "g, k", d["spring_k"])
+PY
+"$DRAPE" run --size 12 --material springs --steps 5 --json >"$out" 2>"$err" || { echo "FAIL: run --material springs"; fail=1; }
+python3 -c "import json,sys; j=json.load(open('$out')); m=j['material']; assert m['model']=='springs' and j['stiffness']==m['stiffness'] and m['derived']['spring_k']['structural']==m['stiffness'], m; print('ok: run --material springs ->', m['derived'])" || fail=1
+"$DRAPE" materials >"$out" 2>"$err" && grep -q "^denim" "$out" && grep -q "^silk" "$out" || { echo "FAIL: drape materials"; cat "$out" "$err"; fail=1; }
+"$DRAPE" materials --json >"$out" 2>"$err" || fail=1
+python3 -c "import json; l=json.load(open('$out')); assert len(l) >= 6 and all(p['source'] for p in l), l; print('ok: drape materials ->', [p['name'] for p in l])" || fail=1
 
 for h in "--help" "run --help"; do
     # shellcheck disable=SC2086

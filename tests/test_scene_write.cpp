@@ -42,6 +42,7 @@ void expect_same_spec(const SceneSpec& a, const SceneSpec& b, const std::string&
         EXPECT_EQ(a.grid.plane, b.grid.plane) << what;
         EXPECT_EQ(a.grid.pins, b.grid.pins) << what;
         EXPECT_TRUE(same_bits(a.grid.centre, b.grid.centre)) << what;
+        EXPECT_TRUE(same_bits(a.grid.pin_radius, b.grid.pin_radius)) << what;
         break;
     case ClothType::tshirt:
         EXPECT_TRUE(same_bits(a.tshirt.cells_per_metre, b.tshirt.cells_per_metre)) << what;
@@ -74,6 +75,13 @@ void expect_same_spec(const SceneSpec& a, const SceneSpec& b, const std::string&
         EXPECT_EQ(a.mesh.mesh->triangles, b.mesh.mesh->triangles) << what;
         break;
     }
+    EXPECT_EQ(a.model, b.model) << what;
+    EXPECT_EQ(a.fabric.name, b.fabric.name) << what;
+    for (auto [x, y] : {std::pair{a.fabric.density, b.fabric.density}, {a.fabric.stretch_u, b.fabric.stretch_u},
+                        {a.fabric.stretch_v, b.fabric.stretch_v}, {a.fabric.shear, b.fabric.shear},
+                        {a.fabric.bend_u, b.fabric.bend_u}, {a.fabric.bend_v, b.fabric.bend_v},
+                        {a.fabric.damping, b.fabric.damping}})
+        EXPECT_TRUE(same_bits(x, y)) << what;
     for (auto [x, y] : {std::pair{a.stiffness, b.stiffness}, {a.shear_ratio, b.shear_ratio}, {a.bend_ratio, b.bend_ratio},
                         {a.damping_ratio, b.damping_ratio}, {a.seam_stiffness, b.seam_stiffness}})
         EXPECT_TRUE(same_bits(x, y)) << what;

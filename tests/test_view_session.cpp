@@ -542,3 +542,86 @@ TEST(ViewSession, OpensSceneFilesInTheBackgroundAndRefusesBadOnes) {
     std::remove(bad.c_str());
     std::remove(overflow.c_str());
 }
+
+TEST(ViewSessionFabric, SceneFabricIsShownWithItsDerivedValues) {
+    ViewSession s("hang", 16u, 1, std::nullopt); // scene "hang": silk
+    ASSERT_EQ(s.fabric().model, MaterialModel::fabric);
+    EXPECT_EQ(s.fabric().fabric.name, "silk");
+    // the derived values are the built cloth's own (the seeds' units: g per particle, N/m per spring)
+    const Cloth& c = s.sim().cloth();
+    EXPECT_EQ(s.fabric().stiffness[0], c.material[0].stiffness);
+    EXPECT_EQ(s.fabric().stiffness[1], c.material[1].stiffness);
+    ASSERT_FALSE(c.free_inv_mass.empty());
+    EXPECT_NEAR(s.fabric().node_mass_g, 1000.0f / c.free_inv_mass[5], 1e-3f * s.fabric().node_mass_g);
+    EXPECT_TRUE(stable(s));
+    // the spring model's controls are refused with a message: the fabric derives them
+    const float k = s.fabric().stiffness[0];
+    s.set_stiffness(SpringKind::structural, 3000.0f);
+    EXPECT_EQ(s.fabric().stiffness[0], k);
+    EXPECT_NE(s.message().text.find("fabric model derives"), std::string::npos) << s.message().text;
+    const float m = s.fabric().node_mass_g;
+    s.set_node_mass(0.5f);
+    s.wait();
+    EXPECT_EQ(s.fabric().node_mass_g, m);
+    EXPECT_NE(s.message().text.find("areal density"), std::string::npos) << s.message().text;
+}
+
+TEST(ViewSessionFabric, PresetAndFiguresRebuildContinuingTheMotion) {
+    ViewSession s("hang", 16u, 1, std::nullopt);
+    s.advance();
+    const std::uint64_t generation = s.generation();
+    s.set_fabric_preset("denim");
+    s.wait();
+    EXPECT_GT(s.generation(), generation);
+    EXPECT_EQ(s.fabric().fabric.name, "denim");
+    EXPECT_EQ(s.fabric().fabric.bend_u, find_fabric("denim")->bend_u);
+    EXPECT_EQ(s.current_spec().model, MaterialModel::fabric);
+    EXPECT_EQ(s.current_spec().fabric.name, "denim");
+    EXPECT_TRUE(stable(s));
+    // one figure changed: a custom fabric
+    Fabric f = s.fabric().fabric;
+    f.density = 0.2f;
+    s.set_fabric(f);
+    s.wait();
+    EXPECT_EQ(s.fabric().fabric.name, "custom");
+    EXPECT_EQ(s.fabric().fabric.density, 0.2f);
+    // out of range: refused naming the field and its range, nothing changes
+    Fabric bad = s.fabric().fabric;
+    bad.bend_v = -1e-6f;
+    s.set_fabric(bad);
+    s.wait();
+    EXPECT_EQ(s.fabric().fabric.density, 0.2f);
+    EXPECT_NE(s.message().text.find("bend_v_uNm"), std::string::npos) << s.message().text;
+    EXPECT_NE(s.message().text.find("[0, 10000] micro-N*m"), std::string::npos) << s.message().text;
+    s.set_fabric_preset("velvet");
+    EXPECT_NE(s.message().text.find("presets: silk"), std::string::npos) << s.message().text;
+    // undo goes back through the fabrics
+    s.undo();
+    s.wait();
+    EXPECT_EQ(s.fabric().fabric.name, "denim");
+    s.undo();
+    s.wait();
+    EXPECT_EQ(s.fabric().fabric.name, "silk");
+}
+
+TEST(ViewSessionFabric, SwitchingModels) {
+    ViewSession s("hang", 16u, 1, std::nullopt);
+    s.set_material_model(MaterialModel::springs);
+    s.wait();
+    ASSERT_EQ(s.fabric().model, MaterialModel::springs);
+    // the scene's spring fields (the seeds' defaults: 1000 N/m, 0.1 kg over 256 particles)
+    EXPECT_EQ(s.fabric().stiffness[0], 1000.0f);
+    EXPECT_NEAR(s.fabric().node_mass_g, 100.0f / 256.0f, 1e-5f);
+    EXPECT_EQ(s.sim().cloth().material[0].stiffness, 1000.0f);
+    s.set_stiffness(SpringKind::structural, 2000.0f); // the spring controls work again
+    EXPECT_EQ(s.fabric().stiffness[0], 2000.0f);
+    EXPECT_EQ(s.current_spec().model, MaterialModel::springs);
+    s.set_material_model(MaterialModel::fabric);
+    s.wait();
+    EXPECT_EQ(s.fabric().model, MaterialModel::fabric);
+    EXPECT_EQ(s.fabric().fabric.name, "silk"); // the scene's fabric
+    // --material on the command line
+    ViewSession d("hang", 16u, 1, std::nullopt, std::string("denim"));
+    EXPECT_EQ(d.fabric().fabric.name, "denim");
+    EXPECT_THROW(ViewSession("hang", 16u, 1, std::nullopt, std::string("velvet")), InvalidInput);
+}

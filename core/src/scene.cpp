@@ -237,6 +237,7 @@ class ObjectReader {
     }
     bool has(const std::string& key) const { return j_.contains(key); }
     bool has_array(const std::string& key) const { return j_.contains(key) && j_[key].is_array(); }
+    bool has_string(const std::string& key) const { return j_.contains(key) && j_[key].is_string(); }
 
     double number(const std::string& key, double lo, double hi, const char* unit, double fallback) {
         seen_.insert(key);
@@ -426,6 +427,76 @@ void read_mesh_cloth(ObjectReader& cloth, const std::string& base_dir, SceneSpec
     if (!note.empty()) s.warnings.push_back(cloth.source() + ": cloth.file \"" + file + "\": " + note);
 }
 
+/// The "material" object: the seeds' spring fields ("model": "springs", the default when none is given) or a fabric
+/// ("model": "fabric"): a preset in "fabric" with any fields overriding it, or every figure of a custom fabric, in
+/// file units (g/m^2, N/m, micro-N*m, s). A material with fields of both models is refused naming one of each.
+void read_material(ObjectReader& mat, SceneSpec& s) {
+    static const char* const spring_keys[] = {"stiffness", "shear_ratio", "bend_ratio", "damping_ratio"};
+    static const char* const fabric_keys[] = {"fabric",  "density_gsm", "stretch_u", "stretch_v",
+                                              "shear",   "bend_u_uNm",  "bend_v_uNm", "damping"};
+    const char* spring_key = nullptr;
+    const char* fabric_key = nullptr;
+    for (const char* k : spring_keys)
+        if (!spring_key && mat.has(k)) spring_key = k;
+    for (const char* k : fabric_keys)
+        if (!fabric_key && mat.has(k)) fabric_key = k;
+    if (spring_key && fabric_key)
+        mat.fail(mat.at(fabric_key), "is a fabric field but " + mat.at(spring_key) +
+                                         " is a spring-model field; a material is one or the other "
+                                         "(docs/scene_format.md \"material\")");
+    const std::string model = mat.text("model", {"fabric", "springs"}, fabric_key ? "fabric" : "springs");
+    if (model == "springs" && fabric_key)
+        mat.fail(mat.at(fabric_key), "is a fabric field but " + mat.at("model") + " is \"springs\"");
+    if (model == "fabric" && spring_key)
+        mat.fail(mat.at(spring_key), "is a spring-model field but " + mat.at("model") + " is \"fabric\"");
+    s.seam_stiffness = static_cast<float>(mat.number("seam_stiffness", 100.0, 25000.0, " N/m", s.seam_stiffness));
+    if (model == "springs") {
+        s.model = MaterialModel::springs;
+        s.stiffness = static_cast<float>(mat.number("stiffness", 100.0, 25000.0, " N/m", s.stiffness));
+        s.shear_ratio = static_cast<float>(mat.number("shear_ratio", 0.0, 1.0, "", s.shear_ratio));
+        s.bend_ratio = static_cast<float>(mat.number("bend_ratio", 0.0, 1.0, "", s.bend_ratio));
+        s.damping_ratio = static_cast<float>(mat.number("damping_ratio", 0.0, 1.0, "", s.damping_ratio));
+        return;
+    }
+    s.model = MaterialModel::fabric;
+    const std::string base = mat.text("fabric", {}, "");
+    Fabric f;
+    if (!base.empty()) {
+        const std::optional<Fabric> preset = find_fabric(base);
+        if (!preset) mat.fail(mat.at("fabric"), "= \"" + printable(base, 60) + "\" is not a fabric preset (presets: " +
+                                                    fabric_preset_names() + ")");
+        f = *preset;
+    } else {
+        f.damping = 0.0f;
+        for (const char* k : {"density_gsm", "stretch_u", "stretch_v", "shear", "bend_u_uNm", "bend_v_uNm"})
+            if (!mat.has(k))
+                mat.fail(mat.at(k), std::string("is required for a custom fabric (or name a preset in ") +
+                                        mat.at("fabric") + ": " + fabric_preset_names() + ")");
+    }
+    const Fabric before = f;
+    const auto field = [&](const char* key, const FabricRange& r, double scale, float& value) {
+        const std::string unit = std::string(" ") + r.unit;
+        value = static_cast<float>(mat.number(key, r.lo, r.hi, unit.c_str(), double(value) * scale) / scale);
+    };
+    field("density_gsm", fabric_range_density_gsm, fabric_gsm_per_kg_m2, f.density);
+    field("stretch_u", fabric_range_stretch, 1.0, f.stretch_u);
+    field("stretch_v", fabric_range_stretch, 1.0, f.stretch_v);
+    field("shear", fabric_range_shear, 1.0, f.shear);
+    field("bend_u_uNm", fabric_range_bend_uNm, fabric_uNm_per_Nm, f.bend_u);
+    field("bend_v_uNm", fabric_range_bend_uNm, fabric_uNm_per_Nm, f.bend_v);
+    field("damping", fabric_range_damping, 1.0, f.damping);
+    const bool same = f.density == before.density && f.stretch_u == before.stretch_u &&
+                      f.stretch_v == before.stretch_v && f.shear == before.shear && f.bend_u == before.bend_u &&
+                      f.bend_v == before.bend_v && f.damping == before.damping;
+    f.name = !base.empty() && same ? base : "custom";
+    try {
+        validate_fabric(f, mat.source() + ": material");
+    } catch (const InvalidInput& e) {
+        throw FieldError(e.what());
+    }
+    s.fabric = f;
+}
+
 inline constexpr double state_limit = 1e6; ///< |position| (m) and |velocity| (m/s) in a saved state
 
 /// The "state" section: positions and velocities ([x, y, z] per particle) and the pinned particles. Counts are
@@ -564,11 +635,7 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
                  : pins == "left_edge" ? GridPins::left_edge
                  : pins == "none"      ? GridPins::none
                                        : GridPins::corners;
-        // Node mass in seed 000's range 0.001 - 1 g.
-        const double node_mass = double(g.total_mass) / (double(g.n) * g.n);
-        if (!(node_mass >= 1e-6 * 0.999 && node_mass <= 1e-3 * 1.001))
-            cloth.fail(cloth.at("mass"), "gives a node mass of " + format_number(node_mass * 1000.0) +
-                                             " g; allowed range [0.001, 1] g per particle (seed 000)");
+        g.pin_radius = static_cast<float>(cloth.number("pin_radius", 0.0, hang_max_pin_radius, " m", 0.0));
     } else {
         TShirtParams& t = s.tshirt;
         t.cells_per_metre = static_cast<float>(cloth.number("cells_per_metre", 10.0, 1000.0, " 1/m", t.cells_per_metre));
@@ -579,14 +646,34 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
     }
     cloth.finish();
 
-    // material
-    ObjectReader mat = root.object("material");
-    s.stiffness = static_cast<float>(mat.number("stiffness", 100.0, 25000.0, " N/m", s.stiffness));
-    s.shear_ratio = static_cast<float>(mat.number("shear_ratio", 0.0, 1.0, "", s.shear_ratio));
-    s.bend_ratio = static_cast<float>(mat.number("bend_ratio", 0.0, 1.0, "", s.bend_ratio));
-    s.damping_ratio = static_cast<float>(mat.number("damping_ratio", 0.0, 1.0, "", s.damping_ratio));
-    s.seam_stiffness = static_cast<float>(mat.number("seam_stiffness", 100.0, 25000.0, " N/m", s.seam_stiffness));
-    mat.finish();
+    // material: a preset's name, or an object (fabric fields, or the seeds' spring fields)
+    if (root.has_string("material")) {
+        const std::string preset = root.text("material", {}, "");
+        const std::optional<Fabric> f = find_fabric(preset);
+        if (!f) root.fail("material", "= \"" + printable(preset, 60) + "\" is not a fabric preset (presets: " +
+                                          fabric_preset_names() + "; or an object, docs/scene_format.md)");
+        s.model = MaterialModel::fabric;
+        s.fabric = *f;
+    } else {
+        ObjectReader mat = root.object("material");
+        read_material(mat, s);
+        mat.finish();
+    }
+    // With a fabric the mass comes from its areal density: a cloth's own mass or density would be a second answer.
+    if (s.model == MaterialModel::fabric) {
+        const char* key = s.cloth == ClothType::grid || s.cloth == ClothType::tshirt ? "mass" : "density";
+        if (cloth.has(key))
+            cloth.fail(cloth.at(key), std::string("is a spring-model field: with a fabric material the mass comes from "
+                                                  "the fabric's areal density (material.density_gsm); remove ") +
+                                          cloth.at(key) + " or use \"model\": \"springs\"");
+    } else if (s.cloth == ClothType::grid) {
+        // Node mass in seed 000's range 0.001 - 1 g.
+        const HangParams& g = s.grid;
+        const double node_mass = double(g.total_mass) / (double(g.n) * g.n);
+        if (!(node_mass >= 1e-6 * 0.999 && node_mass <= 1e-3 * 1.001))
+            cloth.fail(cloth.at("mass"), "gives a node mass of " + format_number(node_mass * 1000.0) +
+                                             " g; allowed range [0.001, 1] g per particle (seed 000)");
+    }
 
     // physics
     ObjectReader ph = root.object("physics");
@@ -786,6 +873,8 @@ BuiltScene build_scene(const SceneSpec& s) {
         g.shear_ratio = s.shear_ratio;
         g.bend_ratio = s.bend_ratio;
         g.damping_ratio = s.damping_ratio;
+        g.model = s.model;
+        g.fabric = s.fabric;
         SceneBuild b = build_hang_scene(g);
         out.cloth = std::move(b.cloth);
         out.initial = std::move(b.initial);

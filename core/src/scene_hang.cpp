@@ -1,6 +1,7 @@
 // Scene "hang" (BENCH.md).
 #include "drape/scene_hang.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -60,9 +61,22 @@ SceneBuild build_hang_scene(const HangParams& p) {
                 s.z[k] = 0.0f;
             }
         }
+    check_range("pin radius", p.pin_radius, 0.0f, hang_max_pin_radius, " m");
     if (p.pins == GridPins::corners) {
-        inv_mass[grid_index(n, 0, 0)] = 0.0f;
-        inv_mass[grid_index(n, n - 1, 0)] = 0.0f;
+        // A clip of radius pin_radius at each corner: every particle within it (always the corner itself), so the
+        // pinned area, and with it the strain next to the pin, is the same at every resolution.
+        const auto clip = [&](std::uint32_t ci) {
+            const double r = double(p.pin_radius), hh = double(h);
+            const auto reach = static_cast<std::uint32_t>(std::min<double>(n - 1, std::floor(r / hh)));
+            for (std::uint32_t dj = 0; dj <= reach; ++dj)
+                for (std::uint32_t di = 0; di <= reach; ++di) {
+                    if (std::hypot(double(di) * hh, double(dj) * hh) > r * (1.0 + 1e-6)) continue;
+                    const std::uint32_t i = ci == 0 ? di : ci - di;
+                    inv_mass[grid_index(n, i, dj)] = 0.0f;
+                }
+        };
+        clip(0);
+        clip(n - 1);
     } else if (p.pins == GridPins::top_edge) {
         for (std::uint32_t i = 0; i < n; ++i) inv_mass[grid_index(n, i, 0)] = 0.0f;
     } else if (p.pins == GridPins::left_edge) {

@@ -112,23 +112,26 @@ std::string cloth_json(const SceneSpec& s, const std::filesystem::path& relative
                            : g.pins == GridPins::top_edge ? "top_edge"
                            : g.pins == GridPins::left_edge ? "left_edge"
                                                            : "none";
-        f.add("type", str("grid")).add("n", num(g.n)).add("size", num(g.size)).add("mass", num(g.total_mass))
-            .add("plane", str(g.plane == GridPlane::vertical ? "vertical" : "horizontal"))
-            .add("centre", vec(g.centre)).add("pins", str(pins));
+        f.add("type", str("grid")).add("n", num(g.n)).add("size", num(g.size));
+        if (s.model == MaterialModel::springs) f.add("mass", num(g.total_mass));
+        f.add("plane", str(g.plane == GridPlane::vertical ? "vertical" : "horizontal"))
+            .add("centre", vec(g.centre)).add("pins", str(pins)).add("pin_radius", num(g.pin_radius));
         break;
     }
     case ClothType::tshirt: {
         const TShirtParams& t = s.tshirt;
-        f.add("type", str("tshirt")).add("cells_per_metre", num(t.cells_per_metre)).add("mass", num(t.total_mass))
-            .add("shoulder_y", num(t.shoulder_y)).add("gap", num(t.gap)).add("seam_rest_ratio", num(t.seam_rest_ratio));
+        f.add("type", str("tshirt")).add("cells_per_metre", num(t.cells_per_metre));
+        if (s.model == MaterialModel::springs) f.add("mass", num(t.total_mass));
+        f.add("shoulder_y", num(t.shoulder_y)).add("gap", num(t.gap)).add("seam_rest_ratio", num(t.seam_rest_ratio));
         break;
     }
     case ClothType::outline: {
         const OutlineClothSpec& o = s.outline;
         std::string pts;
         for (const auto& v : o.outline.outline) pts += (pts.empty() ? "" : ", ") + ("[" + num(v[0]) + ", " + num(v[1]) + "]");
-        f.add("type", str("outline")).add("outline", "[" + pts + "]").add("spacing", num(o.spacing))
-            .add("density", num(o.density)).add("plane", str(o.plane == GridPlane::vertical ? "vertical" : "horizontal"))
+        f.add("type", str("outline")).add("outline", "[" + pts + "]").add("spacing", num(o.spacing));
+        if (s.model == MaterialModel::springs) f.add("density", num(o.density));
+        f.add("plane", str(o.plane == GridPlane::vertical ? "vertical" : "horizontal"))
             .add("centre", vec(o.centre)).add("pins", str(o.pin_top ? "top_edge" : "none"));
         if (o.copy) {
             std::string sew;
@@ -153,12 +156,33 @@ std::string cloth_json(const SceneSpec& s, const std::filesystem::path& relative
         } else {
             pins = str(m.pins == MeshPins::top ? "top" : "none");
         }
-        f.add("type", str("mesh")).add("file", str(file.generic_string())).add("density", num(m.density))
-            .add("scale", num(m.scale)).add("centre", vec(m.centre)).add("pins", pins);
+        f.add("type", str("mesh")).add("file", str(file.generic_string()));
+        if (s.model == MaterialModel::springs) f.add("density", num(m.density));
+        f.add("scale", num(m.scale)).add("centre", vec(m.centre)).add("pins", pins);
         break;
     }
     }
     return f.object();
+}
+
+/// The material: the fabric's every figure in file units (exact: a float times 1000 or 1e6 is exact in a double,
+/// and the division on reading gives the float back), naming its preset when it is one unchanged; or the springs.
+std::string material_json(const SceneSpec& s) {
+    Fields mat;
+    if (s.model == MaterialModel::fabric) {
+        const Fabric& f = s.fabric;
+        mat.add("model", str("fabric"));
+        if (find_fabric(f.name)) mat.add("fabric", str(f.name));
+        mat.add("density_gsm", num(double(f.density) * fabric_gsm_per_kg_m2)).add("stretch_u", num(f.stretch_u))
+            .add("stretch_v", num(f.stretch_v)).add("shear", num(f.shear))
+            .add("bend_u_uNm", num(double(f.bend_u) * fabric_uNm_per_Nm))
+            .add("bend_v_uNm", num(double(f.bend_v) * fabric_uNm_per_Nm)).add("damping", num(f.damping));
+    } else {
+        mat.add("model", str("springs")).add("stiffness", num(s.stiffness)).add("shear_ratio", num(s.shear_ratio))
+            .add("bend_ratio", num(s.bend_ratio)).add("damping_ratio", num(s.damping_ratio));
+    }
+    mat.add("seam_stiffness", num(s.seam_stiffness));
+    return mat.object();
 }
 
 std::string state_json(const SceneState& st) {
@@ -187,10 +211,7 @@ std::string to_json(const SceneSpec& s, const SceneState* state, const std::file
     out += "  \"scene\": " + str(s.name) + ",\n";
     out += "  \"description\": " + str(s.description) + ",\n";
     out += "  \"cloth\": " + cloth_json(s, relative_to) + ",\n";
-    Fields mat;
-    mat.add("stiffness", num(s.stiffness)).add("shear_ratio", num(s.shear_ratio)).add("bend_ratio", num(s.bend_ratio))
-        .add("damping_ratio", num(s.damping_ratio)).add("seam_stiffness", num(s.seam_stiffness));
-    out += "  \"material\": " + mat.object() + ",\n";
+    out += "  \"material\": " + material_json(s) + ",\n";
     const SimulationParams& p = s.physics;
     Fields ph, wind, aero, sl;
     wind.add("enabled", boolean(p.wind.enabled)).add("strength", num(p.wind.strength));

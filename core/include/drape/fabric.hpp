@@ -49,7 +49,27 @@ struct FabricPreset {
 const std::vector<FabricPreset>& fabric_presets();
 /// A preset by name (case-sensitive), or nullopt.
 std::optional<Fabric> find_fabric(const std::string& name);
-/// Checks every field's range; throws InvalidInput naming `what` (e.g. "scene.json: material") and the field.
+/// The preset names, comma-separated, in the order of fabric_presets() (for messages: "silk, cotton_shirting, ...").
+std::string fabric_preset_names();
+
+// File and panel units: areal density in g/m^2, stiffness in N/m, bending rigidity in micro-newton-metres, damping in
+// s. Fabric holds SI (kg/m^2, N*m); multiply by these to get file units.
+inline constexpr double fabric_gsm_per_kg_m2 = 1000.0;
+inline constexpr double fabric_uNm_per_Nm = 1e6;
+
+/// Allowed range of one fabric field, in file units, wide enough for every real fabric (tulle to canvas).
+struct FabricRange {
+    double lo, hi;
+    const char* unit;
+};
+inline constexpr FabricRange fabric_range_density_gsm{5.0, 2000.0, "g/m^2"};
+inline constexpr FabricRange fabric_range_stretch{10.0, 1e6, "N/m"};
+inline constexpr FabricRange fabric_range_shear{0.01, 1e5, "N/m"};
+inline constexpr FabricRange fabric_range_bend_uNm{0.0, 1e4, "micro-N*m"};
+inline constexpr FabricRange fabric_range_damping{0.0, 0.1, "s"};
+
+/// Checks every field's range; throws InvalidInput naming `what` (e.g. "scene.json: material") and the field
+/// ("scene.json: material.bend_u_uNm = ... micro-N*m is outside the allowed range [0, 10000] micro-N*m").
 void validate_fabric(const Fabric& fabric, const std::string& what);
 
 } // namespace drape

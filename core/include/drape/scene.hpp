@@ -69,7 +69,11 @@ struct SceneSpec {
     TShirtParams tshirt;  ///< cloth.type = "tshirt"
     OutlineClothSpec outline; ///< cloth.type = "outline"
     MeshClothSpec mesh;       ///< cloth.type = "mesh"
-    /// Material (N/m; damping as a fraction of critical, like HangParams).
+    /// The material: a fabric in physical units (docs/fabric.md; "material": "denim" or an object of fabric fields)
+    /// or the seeds' springs (the fields below). Grid cloths pass both to HangParams.
+    MaterialModel model = MaterialModel::springs;
+    Fabric fabric;
+    /// Spring-model material (N/m; damping as a fraction of critical, like HangParams).
     float stiffness = 1000.0f, shear_ratio = 0.5f, bend_ratio = 0.1f, damping_ratio = 0.05f;
     float seam_stiffness = 1000.0f; ///< N/m, seam springs (tshirt)
     SimulationParams physics;       ///< gravity, drag, integrator, wind, strain limit, colliders (dt: see below)

@@ -49,6 +49,8 @@ struct HangParams {
 
 inline constexpr std::uint32_t hang_min_n = 2;
 inline constexpr std::uint32_t hang_max_n = 4096;
+/// Largest pin radius, m (HangParams::pin_radius).
+inline constexpr float hang_max_pin_radius = 1.0f;
 
 struct SceneBuild {
     Cloth cloth;

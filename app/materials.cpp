@@ -1,0 +1,118 @@
+// `drape materials`, `--material`, and the derived per-element values of a built cloth.
+#include "materials.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <iostream>
+#include <limits>
+
+#include "drape/errors.hpp"
+
+namespace drape::app {
+
+DerivedMaterial derive_material(const Cloth& cloth) {
+    DerivedMaterial d;
+    const std::size_t n = cloth.particle_count;
+    double sum = 0.0, lo = std::numeric_limits<double>::max(), hi = 0.0;
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const float inv = cloth.free_inv_mass.empty() ? cloth.inv_mass[i] : cloth.free_inv_mass[i];
+        if (!(inv > 0.0f)) continue;
+        const double g = 1000.0 / double(inv);
+        sum += g;
+        lo = std::min(lo, g);
+        hi = std::max(hi, g);
+        ++count;
+    }
+    if (count) {
+        d.node_mass_g_mean = sum / double(count);
+        d.node_mass_g_min = lo;
+        d.node_mass_g_max = hi;
+    }
+    for (std::size_t k = 0; k < spring_kind_count; ++k) {
+        d.stiffness[k] = cloth.material[k].stiffness;
+        d.damping[k] = cloth.material[k].damping;
+    }
+    return d;
+}
+
+nlohmann::ordered_json fabric_json(const Fabric& f) {
+    nlohmann::ordered_json j;
+    j["name"] = f.name;
+    j["density_gsm"] = double(f.density) * fabric_gsm_per_kg_m2;
+    j["stretch_u"] = f.stretch_u;
+    j["stretch_v"] = f.stretch_v;
+    j["shear"] = f.shear;
+    j["bend_u_uNm"] = double(f.bend_u) * fabric_uNm_per_Nm;
+    j["bend_v_uNm"] = double(f.bend_v) * fabric_uNm_per_Nm;
+    j["damping"] = f.damping;
+    return j;
+}
+
+nlohmann::ordered_json material_report(const SceneSpec& spec, const Cloth& cloth) {
+    nlohmann::ordered_json j;
+    j["model"] = material_model_name(spec.model);
+    if (spec.model == MaterialModel::fabric) {
+        j["fabric"] = fabric_json(spec.fabric);
+    } else {
+        j["stiffness"] = spec.stiffness;
+        j["shear_ratio"] = spec.shear_ratio;
+        j["bend_ratio"] = spec.bend_ratio;
+        j["damping_ratio"] = spec.damping_ratio;
+    }
+    const DerivedMaterial d = derive_material(cloth);
+    nlohmann::ordered_json k, kd;
+    for (std::size_t s = 0; s < spring_kind_count; ++s) {
+        const char* name = spring_kind_name(static_cast<SpringKind>(s));
+        k[name] = d.stiffness[s];
+        kd[name] = d.damping[s];
+    }
+    j["derived"] = {{"node_mass_g", d.node_mass_g_mean},
+                    {"node_mass_g_min", d.node_mass_g_min},
+                    {"node_mass_g_max", d.node_mass_g_max},
+                    {"spring_k", k},
+                    {"spring_damping", kd}};
+    return j;
+}
+
+int materials_command(bool json) {
+    if (json) {
+        nlohmann::ordered_json list = nlohmann::ordered_json::array();
+        for (const FabricPreset& p : fabric_presets()) {
+            nlohmann::ordered_json j = fabric_json(p.fabric);
+            j["description"] = p.description;
+            j["source"] = p.source;
+            list.push_back(j);
+        }
+        std::cout << list.dump() << std::endl;
+        return exit_code::ok;
+    }
+    std::printf("%-16s %8s %9s %9s %8s %9s %9s %9s  %s\n", "preset", "g/m^2", "u N/m", "v N/m", "shear", "bend_u",
+                "bend_v", "damping", "description");
+    std::printf("%-16s %8s %9s %9s %8s %9s %9s %9s\n", "", "", "stretch", "stretch", "N/m", "uN*m", "uN*m", "s");
+    for (const FabricPreset& p : fabric_presets()) {
+        const Fabric& f = p.fabric;
+        std::printf("%-16s %8.0f %9.0f %9.0f %8.1f %9.3g %9.3g %9.2g  %s\n", f.name.c_str(),
+                    double(f.density) * fabric_gsm_per_kg_m2, double(f.stretch_u), double(f.stretch_v),
+                    double(f.shear), double(f.bend_u) * fabric_uNm_per_Nm, double(f.bend_v) * fabric_uNm_per_Nm,
+                    double(f.damping), p.description.c_str());
+    }
+    std::printf("Sources: docs/fabric.md \"Presets\" (or drape materials --json). Use one with --material NAME or "
+                "\"material\": \"NAME\" in a scene file.\n");
+    return exit_code::ok;
+}
+
+void apply_material_flag(SceneSpec& spec, const std::string& name) {
+    if (name == "springs") {
+        spec.model = MaterialModel::springs;
+        return;
+    }
+    const std::optional<Fabric> f = find_fabric(name);
+    if (!f)
+        throw InvalidInput("--material: '" + name + "' is not a material (fabric presets: " + fabric_preset_names() +
+                           "; or springs, the seeds' spring model; drape materials lists the presets)");
+    spec.model = MaterialModel::fabric;
+    spec.fabric = *f;
+}
+
+} // namespace drape::app

@@ -1,0 +1,37 @@
+// Materials as users see them: the fabric presets in file units (`drape materials`), and a built cloth's derived
+// per-element values (node mass, spring stiffness per kind) that the run's JSON and the viewer's Fabric panel show.
+#pragma once
+
+#include <array>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "drape/cloth.hpp"
+#include "drape/scene.hpp"
+
+namespace drape::app {
+
+/// What the engine derived from the material and the mesh (the seeds' units: grams per particle, N/m per spring).
+struct DerivedMaterial {
+    double node_mass_g_mean = 0.0, node_mass_g_min = 0.0, node_mass_g_max = 0.0; ///< free particles' masses, g
+    std::array<float, spring_kind_count> stiffness{}; ///< N/m per spring kind (structural, shear, bend, seam)
+    std::array<float, spring_kind_count> damping{};   ///< N*s/m per spring kind
+};
+DerivedMaterial derive_material(const Cloth& cloth);
+
+/// A fabric's figures in file units: { "name", "density_gsm", "stretch_u", "stretch_v", "shear", "bend_u_uNm",
+/// "bend_v_uNm", "damping" }.
+nlohmann::ordered_json fabric_json(const Fabric& fabric);
+
+/// The run's "material" object: the model, the fabric (fabric model) or the spring fields (springs), and "derived".
+nlohmann::ordered_json material_report(const SceneSpec& spec, const Cloth& cloth);
+
+/// `drape materials`: the presets with their figures in file units, a table or (json) one JSON array. Returns 0.
+int materials_command(bool json);
+
+/// Applies `drape run --material NAME` to a scene: a preset switches it to the fabric model with that fabric;
+/// "springs" to the seeds' spring model with the scene's spring fields. Throws InvalidInput listing the valid names.
+void apply_material_flag(SceneSpec& spec, const std::string& name);
+
+} // namespace drape::app
