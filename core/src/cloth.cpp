@@ -39,6 +39,9 @@ Cloth cook_cloth(std::span<const float> inv_mass, std::vector<Edge> edges,
         if (!(e.rest > 0.0f) || !std::isfinite(e.rest))
             throw InvalidInput("spring " + std::to_string(e.a) + "-" + std::to_string(e.b) + " has rest length " +
                                std::to_string(e.rest) + " m (must be > 0 and finite)");
+        if (!(e.scale >= 0.0f && e.scale <= 1e3f))
+            throw InvalidInput("spring " + std::to_string(e.a) + "-" + std::to_string(e.b) + " has stiffness scale " +
+                               std::to_string(e.scale) + " (must be in [0, 1000])");
         if (e.a > e.b) std::swap(e.a, e.b);
     }
     std::sort(edges.begin(), edges.end(), [](const Edge& l, const Edge& r) {
@@ -67,6 +70,7 @@ Cloth cook_cloth(std::span<const float> inv_mass, std::vector<Edge> edges,
             s.b.push_back(c.edges[e].b);
             s.rest.push_back(c.edges[e].rest);
             s.kind.push_back(c.edges[e].kind);
+            s.scale.push_back(c.edges[e].scale);
             s.particles.push_back(c.edges[e].a);
             s.particles.push_back(c.edges[e].b);
         }
@@ -84,9 +88,10 @@ void apply_materials(Cloth& cloth, const std::array<SpringMaterial, spring_kind_
     for (std::size_t at = 0; at < g.sell_entry_count(); ++at) {
         const std::uint32_t e = g.sell_edge[at];
         if (e == std::numeric_limits<std::uint32_t>::max()) continue;
-        const SpringMaterial& m = material[static_cast<std::size_t>(cloth.edges[e].kind)];
-        g.sell_stiffness[at] = m.stiffness;
-        g.sell_damping[at] = m.damping;
+        const Edge& edge = cloth.edges[e];
+        const SpringMaterial& m = material[static_cast<std::size_t>(edge.kind)];
+        g.sell_stiffness[at] = m.stiffness * edge.scale;
+        g.sell_damping[at] = m.damping * edge.scale;
     }
 }
 

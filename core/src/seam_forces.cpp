@@ -39,8 +39,8 @@ template <bool Parallel> void Simulation::seam_forces_stage() {
                 dvy = (dy - dvy) * inv_dt;
                 dvz = (dz - dvz) * inv_dt;
             }
-            const float c = m.stiffness * (1.0f - s.rest[k] * inv) +
-                            m.damping * (dvx * dx + dvy * dy + dvz * dz) * inv * inv;
+            const float k_s = m.stiffness * s.scale[k], kd_s = m.damping * s.scale[k];
+            const float c = k_s * (1.0f - s.rest[k] * inv) + kd_s * (dvx * dx + dvy * dy + dvz * dz) * inv * inv;
             fx[a] += c * dx;
             fy[a] += c * dy;
             fz[a] += c * dz;

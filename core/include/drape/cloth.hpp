@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "drape/aligned_array.hpp"
+#include "drape/bending.hpp"
 #include "drape/colouring.hpp"
 #include "drape/simd.hpp"
 #include "drape/spring_graph.hpp"
@@ -40,7 +41,21 @@ struct GridStencil {
     std::array<std::int32_t, slot_count> offset{};  ///< neighbour index - own index
     std::array<SpringKind, slot_count> kind{};      ///< material of the spring in this slot
     std::array<float, slot_count> rest{};           ///< rest length, m
-    AlignedArray<std::uint32_t> mask;               ///< per particle: bit s set when slot s's spring exists
+    std::array<float, slot_count> scale{1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1}; ///< Edge::scale of the slot's springs
+    /// Per particle:
+    ///   bit s (0..11)        slot s's spring exists (springs model; in the fabric model the four bend slots
+    ///                        +-2, +-2N carry no spring, so their bit says the neighbour exists: bending reads it);
+    ///   bit half_bit + s     slot s's spring has half the slot's stiffness (Edge::scale = scale[s] / 2: a membrane
+    ///                        edge on the cloth's boundary, fabric model);
+    ///   bits bend_u_bit + 0..2  the second difference along the row centred at the particle's left neighbour, at the
+    ///                        particle, at its right neighbour exists (fabric model); bend_v_bit + 0..2 likewise
+    ///                        along the column (up, self, down);
+    ///   bit edge_row_bit     the particle's row is the first or last (its row elements have half weight);
+    ///   bit edge_column_bit  its column is the first or last (its column elements have half weight).
+    /// A twist element (cell cross difference) exists exactly where the cell's diagonal (shear-slot) spring does.
+    AlignedArray<std::uint32_t> mask;
+    static constexpr std::uint32_t half_bit = 12, bend_u_bit = 24, bend_v_bit = 27, edge_row_bit = 30,
+                                   edge_column_bit = 31;
 };
 
 /// Seam springs (SpringKind::seam, e.g. sewing two panels): the irregular part of a garment. They are not in the CSR;
@@ -51,6 +66,7 @@ struct SeamSet {
     std::vector<std::uint32_t> a, b;     ///< spring ends, in group order
     std::vector<float> rest;             ///< m, in group order
     std::vector<SpringKind> kind;        ///< material of each (seam), in group order
+    std::vector<float> scale;            ///< Edge::scale of each, in group order
     std::vector<std::uint32_t> particles; ///< every particle touched by a seam, ascending
     bool empty() const noexcept { return a.empty(); }
 };
@@ -69,6 +85,7 @@ struct Cloth {
     SpringGraph graph;               ///< CSR and SIMD-sliced CSR over the edges, seams excepted
     SeamSet seams;                   ///< seam springs, coloured
     std::optional<GridStencil> grid; ///< present when the cloth is a full or masked regular grid
+    BendingSet bending;              ///< bending elements and their Q (bending.hpp); empty in the springs model
     std::vector<std::uint32_t> triangles; ///< 3 indices per triangle, counter-clockwise seen from +normal
     /// The simulation frame: every position of this cloth (InitialState, the Simulation's state, its
     /// colliders and grab targets) is relative to this point, m, world coordinates in double. Scenes put it

@@ -28,6 +28,9 @@ struct Edge {
     std::uint32_t a = 0, b = 0;
     SpringKind kind = SpringKind::structural;
     float rest = 0.0f; ///< rest length, m
+    /// The spring's stiffness and damping are its kind's material times this (1 in the springs model; the fabric model
+    /// sets each spring's share of the membrane it represents, e.g. 1/2 on a boundary edge, docs/fabric.md).
+    float scale = 1.0f;
 };
 
 struct SpringGraph {
@@ -42,7 +45,7 @@ struct SpringGraph {
     std::vector<std::uint32_t> slice_slots;  ///< slice_count
     AlignedArray<std::uint32_t> sell_neighbour;
     AlignedArray<float> sell_rest;      ///< m
-    AlignedArray<float> sell_stiffness; ///< N/m (0 for padding)
+    AlignedArray<float> sell_stiffness; ///< N/m: material stiffness x Edge::scale (0 for padding)
     AlignedArray<float> sell_damping;   ///< N*s/m (0 for padding)
     std::vector<std::uint32_t> sell_edge; ///< per SELL entry: edge index, or UINT32_MAX for padding
 
