@@ -9,7 +9,10 @@ Forces spring_forces(const Cloth& cloth, const State& s) {
     Forces f{std::vector<double>(n, 0.0), std::vector<double>(n, 0.0), std::vector<double>(n, 0.0),
              std::vector<double>(n, 0.0)};
     for (const Edge& e : cloth.edges) {
-        const SpringMaterial& m = cloth.material[static_cast<std::size_t>(e.kind)];
+        const SpringMaterial& mat = cloth.material[static_cast<std::size_t>(e.kind)];
+        const struct {
+            double stiffness, damping;
+        } m{double(mat.stiffness) * e.scale, double(mat.damping) * e.scale};
         const double dx = s.x[e.b] - s.x[e.a], dy = s.y[e.b] - s.y[e.a], dz = s.z[e.b] - s.z[e.a];
         const double l2 = dx * dx + dy * dy + dz * dz;
         const double l = std::sqrt(l2);
@@ -26,6 +29,33 @@ Forces spring_forces(const Cloth& cloth, const State& s) {
         const double mag = (std::fabs(hooke) + std::fabs(damp)) * l;
         f.scale[e.a] += mag;
         f.scale[e.b] += mag;
+    }
+    const double beta = cloth.bending.damping;
+    for (const BendElement& el : cloth.bending.elements) {
+        double q[3] = {0.0, 0.0, 0.0}, spread = 0.0;
+        for (std::size_t k = 0; k < 4; ++k) {
+            const std::uint32_t i = el.v[k];
+            q[0] += el.c[k] * (s.x[i] + beta * s.vx[i]);
+            q[1] += el.c[k] * (s.y[i] + beta * s.vy[i]);
+            q[2] += el.c[k] * (s.z[i] + beta * s.vz[i]);
+        }
+        for (std::size_t k = 0; k < 4; ++k) {
+            const std::uint32_t i = el.v[k];
+            const double wc = double(el.weight) * el.c[k];
+            f.fx[i] -= wc * q[0];
+            f.fy[i] -= wc * q[1];
+            f.fz[i] -= wc * q[2];
+            // Cancellation scale: the kernels sum w c_k c_m (x_m - x_k + beta (v_m - v_k)) over m.
+            spread = 0.0;
+            for (std::size_t m = 0; m < 4; ++m) {
+                const std::uint32_t j = el.v[m];
+                const double dx = s.x[j] - s.x[i] + beta * (s.vx[j] - s.vx[i]),
+                             dy = s.y[j] - s.y[i] + beta * (s.vy[j] - s.vy[i]),
+                             dz = s.z[j] - s.z[i] + beta * (s.vz[j] - s.vz[i]);
+                spread += std::fabs(el.c[m]) * std::sqrt(dx * dx + dy * dy + dz * dz);
+            }
+            f.scale[i] += std::fabs(wc) * spread;
+        }
     }
     return f;
 }

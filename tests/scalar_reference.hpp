@@ -19,7 +19,9 @@ struct Forces {
     std::vector<double> scale;      ///< per particle: sum of |term| over its springs (cancellation scale), N
 };
 
-/// Spring forces F_i = sum_j [k (1 - l0/l) d + kd ((v_j - v_i).d) d / l^2], d = x_j - x_i.
+/// Spring forces F_i = sum_j [k (1 - l0/l) d + kd ((v_j - v_i).d) d / l^2], d = x_j - x_i (k, kd: the kind's
+/// material times Edge::scale), plus the bending forces -Q (x + beta v) from the cold element list: per element
+/// q_e = sum_k c_k (x_k + beta v_k), F_k -= w_e c_k q_e (bending.hpp).
 Forces spring_forces(const Cloth& cloth, const State& s);
 
 /// External acceleration of movable particles: g - kr v + wind(t); zero for pinned.

@@ -148,4 +148,129 @@ TEST(KernelVariants, StateChangesAtAll) { // guards the tests above against comp
     EXPECT_NE(before, sim.checksum());
 }
 
+// ---- The fabric model (MaterialModel::fabric): membrane springs with per-edge stiffness, bending, Rayleigh damping.
+
+/// A soft, stiff-bending fabric, so that at N ~ 20-40 the bending forces are as large as the membrane's (with a real
+/// fabric they are 1e-6 of it and an error in them would hide in the springs' rounding).
+HangParams fabric_hang() {
+    HangParams hp;
+    hp.model = MaterialModel::fabric;
+    hp.fabric.density = 0.2f;
+    hp.fabric.stretch_u = 20.0f;
+    hp.fabric.stretch_v = 30.0f;
+    hp.fabric.shear = 2.0f;
+    hp.fabric.bend_u = 2e-3f;
+    hp.fabric.bend_v = 1e-3f;
+    hp.fabric.damping = 0.02f;
+    return hp;
+}
+
+class FabricVsReference : public ::testing::TestWithParam<KernelCase> {};
+
+TEST_P(FabricVsReference, ForcesMatchScalarReference) {
+    const KernelCase kc = GetParam();
+    for (std::uint32_t n : {5u, 23u, 40u}) {
+        SceneBuild scene = perturbed_hang(n, 0.3f, 0.5f, 4321 + n, fabric_hang());
+        SimulationParams p = default_params(scene.cloth, kc.integrator, kc.kernel);
+        p.fused = false;
+        Simulation sim(std::move(scene.cloth), scene.initial, p);
+        ASSERT_EQ(sim.kernel(), kc.kernel);
+        const reference::State st = reference::read_state(sim);
+        const reference::Forces ref = reference::spring_forces(sim.cloth(), st);
+        Cloth no_bending = sim.cloth();
+        no_bending.bending = BendingSet{};
+        const reference::Forces springs_only = reference::spring_forces(no_bending, st);
+        sim.run_stage(Stage::spring_forces);
+        const auto out = sim.stage_output();
+        double worst = 0.0, bending_share = 0.0;
+        for (std::size_t i = 0; i < sim.cloth().particle_count; ++i) {
+            const double scale = ref.scale[i] + 1e-30;
+            worst = std::max({worst, std::fabs(out.fx[i] - ref.fx[i]) / scale, std::fabs(out.fy[i] - ref.fy[i]) / scale,
+                              std::fabs(out.fz[i] - ref.fz[i]) / scale});
+            bending_share = std::max({bending_share, std::fabs(springs_only.fx[i] - ref.fx[i]) / scale,
+                                      std::fabs(springs_only.fy[i] - ref.fy[i]) / scale});
+        }
+        // Verlet's velocity difference ((x_j - x_i) - (x_prev_j - x_prev_i)) / dt loses the digits of x - x_prev, and
+        // beta / dt (~300 here) amplifies that in the bending damping (measured 2.7e-5).
+        EXPECT_LE(worst, kc.integrator == Integrator::verlet ? 1e-4 : 1e-5) << "n = " << n;
+        if (n > 5) EXPECT_GE(bending_share, 1e3 * 1e-5) << "n = " << n << ": bending must matter in this test";
+        RecordProperty("worst_relative_error_n" + std::to_string(n), std::to_string(worst));
+    }
+}
+
+TEST_P(FabricVsReference, WholeSubstepMatchesScalarReference) {
+    const KernelCase kc = GetParam();
+    SceneBuild scene = perturbed_hang(31, 0.3f, 0.5f, 98, fabric_hang());
+    SimulationParams p = default_params(scene.cloth, kc.integrator, kc.kernel);
+    Simulation sim(std::move(scene.cloth), scene.initial, p);
+    sim.step(3);
+    const reference::State before = reference::read_state(sim);
+    const reference::Forces f = reference::spring_forces(sim.cloth(), before);
+    const reference::State ref = reference::step_euler(sim.cloth(), p, before, sim.time());
+    sim.step(1);
+    const reference::State got = reference::read_state(sim);
+    const double dt = p.dt;
+    double worst_v = 0.0, worst_x = 0.0;
+    for (std::size_t i = 0; i < sim.cloth().particle_count; ++i) {
+        const double dv_scale = dt * (sim.cloth().inv_mass[i] * f.scale[i] + 20.0) + std::fabs(before.vx[i]) +
+                                std::fabs(before.vy[i]) + std::fabs(before.vz[i]) + 1e-12;
+        worst_v = std::max({worst_v, std::fabs(got.vx[i] - ref.vx[i]) / dv_scale,
+                            std::fabs(got.vy[i] - ref.vy[i]) / dv_scale, std::fabs(got.vz[i] - ref.vz[i]) / dv_scale});
+        // Positions: the step's displacement sets the scale, after one float rounding of the new position itself (this
+        // soft fabric's substep, 7e-5 s, moves a particle by a few ulps of its coordinate).
+        const double dx_scale = dt * dv_scale;
+        auto err = [&](double g, double r) { return std::max(0.0, std::fabs(g - r) - 1.2e-7 * std::fabs(r)) / dx_scale; };
+        worst_x = std::max({worst_x, err(got.x[i], ref.x[i]), err(got.y[i], ref.y[i]), err(got.z[i], ref.z[i])});
+    }
+    const double tol = kc.integrator == Integrator::verlet ? 1e-3 : 1e-5;
+    EXPECT_LE(worst_v, tol);
+    EXPECT_LE(worst_x, tol);
+}
+
+INSTANTIATE_TEST_SUITE_P(Paths, FabricVsReference,
+                         ::testing::Values(KernelCase{KernelPath::grid, Integrator::symplectic_euler},
+                                           KernelCase{KernelPath::csr, Integrator::symplectic_euler},
+                                           KernelCase{KernelPath::grid, Integrator::verlet},
+                                           KernelCase{KernelPath::csr, Integrator::verlet}),
+                         [](const auto& info) {
+                             return std::string(kernel_path_name(info.param.kernel)) + "_" +
+                                    integrator_name(info.param.integrator);
+                         });
+
+Simulation fabric_run(KernelPath kernel, bool fused, bool serial, Integrator integ, int steps = 60) {
+    SceneBuild scene = perturbed_hang(37, 0.2f, 0.3f, 6, fabric_hang());
+    SimulationParams p = default_params(scene.cloth, integ, kernel);
+    p.fused = fused;
+    p.wind.enabled = true;
+    Simulation sim(std::move(scene.cloth), scene.initial, p);
+    serial ? sim.step_serial(steps) : sim.step(steps);
+    return sim;
+}
+
+// The grid stencil evaluates bending in closed form, the CSR path as Q's rows: the same sum in another order, so the
+// two agree to float rounding, not bit for bit (their membrane springs are the same operations in the same order).
+TEST(FabricVariants, GridStencilMatchesCsrToRounding) {
+    for (Integrator integ : {Integrator::symplectic_euler, Integrator::verlet}) {
+        const Simulation grid = fabric_run(KernelPath::grid, true, false, integ, 30);
+        const Simulation csr = fabric_run(KernelPath::csr, true, false, integ, 30);
+        double worst = 0.0;
+        for (std::size_t i = 0; i < grid.cloth().particle_count; ++i)
+            worst = std::max({worst, double(std::fabs(grid.x()[i] - csr.x()[i])),
+                              double(std::fabs(grid.y()[i] - csr.y()[i])), double(std::fabs(grid.z()[i] - csr.z()[i]))});
+        EXPECT_LE(worst, 1e-6) << integrator_name(integ) << ": m, after 30 substeps of a 1 m cloth";
+        EXPECT_NE(grid.checksum(), fabric_run(KernelPath::grid, true, false, integ, 29).checksum());
+    }
+}
+
+TEST(FabricVariants, FusedEqualsStagedAndParallelEqualsSerialBitwise) {
+    for (KernelPath k : {KernelPath::grid, KernelPath::csr})
+        for (Integrator integ : {Integrator::symplectic_euler, Integrator::verlet}) {
+            const std::uint64_t fused = fabric_run(k, true, false, integ).checksum();
+            EXPECT_EQ(fused, fabric_run(k, false, false, integ).checksum())
+                << kernel_path_name(k) << " " << integrator_name(integ);
+            EXPECT_EQ(fused, fabric_run(k, true, true, integ).checksum())
+                << kernel_path_name(k) << " " << integrator_name(integ);
+        }
+}
+
 } // namespace

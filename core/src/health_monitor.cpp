@@ -36,10 +36,18 @@ void HealthMonitor::init(const Cloth& cloth, const SimulationParams& params) {
     chunk_elastic_.assign(chunk_strain_.size(), 0.0);
     block_box_.assign(7 * blocks, 0.0f);
     for (auto* v : {&snap_x_, &snap_y_, &snap_z_, &snap_u_, &snap_v_, &snap_w_}) v->assign(n, 0.0f);
-    k_struct_ = cloth.material[static_cast<std::size_t>(SpringKind::structural)].stiffness;
+    // The softest structural spring (its kind's material times Edge::scale) and the shortest: the strain bound's
+    // most permissive combination.
+    const double k_material = cloth.material[static_cast<std::size_t>(SpringKind::structural)].stiffness;
+    k_struct_ = 0.0;
     rest_min_ = 0.0;
     for (const Edge& e : cloth.edges)
-        if (e.kind == SpringKind::structural) rest_min_ = rest_min_ == 0.0 ? e.rest : std::min(rest_min_, double(e.rest));
+        if (e.kind == SpringKind::structural) {
+            rest_min_ = rest_min_ == 0.0 ? e.rest : std::min(rest_min_, double(e.rest));
+            const double k = k_material * e.scale;
+            k_struct_ = k_struct_ == 0.0 ? k : std::min(k_struct_, k);
+        }
+    if (k_struct_ == 0.0) k_struct_ = k_material;
     dt_bound_ = stability_bound(cloth, params).dt_max;
 }
 
@@ -138,7 +146,7 @@ void HealthMonitor::rebaseline(const Cloth& cloth, const SimulationParams& param
             const Edge& edge = cloth.edges[k];
             const float dx = s.x[edge.b] - s.x[edge.a], dy = s.y[edge.b] - s.y[edge.a], dz = s.z[edge.b] - s.z[edge.a];
             const double stretch = std::sqrt(double(dx) * dx + double(dy) * dy + double(dz) * dz) - edge.rest;
-            e += 0.5 * cloth.material[static_cast<std::size_t>(edge.kind)].stiffness * stretch * stretch;
+            e += 0.5 * cloth.material[static_cast<std::size_t>(edge.kind)].stiffness * edge.scale * stretch * stretch;
         }
         chunk_elastic_[ch] = e;
     });
@@ -161,6 +169,9 @@ void HealthMonitor::rebaseline(const Cloth& cloth, const SimulationParams& param
     });
     double elastic = 0.0;
     for (double e : chunk_elastic_) elastic += e;
+    // The bending energy (serial, once per baseline; no allocation).
+    if (!cloth.bending.empty())
+        elastic += bending_energy(cloth.bending.elements, {s.x.data(), n}, {s.y.data(), n}, {s.z.data(), n});
     float lo[3] = {s.x[0], s.y[0], s.z[0]}, hi[3] = {s.x[0], s.y[0], s.z[0]};
     float max_inv_mass = 0.0f;
     for (std::size_t b = 0; b < cloth.block_count(); ++b) {

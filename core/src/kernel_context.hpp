@@ -48,6 +48,8 @@ struct StepContext {
     std::array<float, GridStencil::slot_count> grid_k;     ///< N/m
     std::array<float, GridStencil::slot_count> grid_krest; ///< k * l0, N
     std::array<float, GridStencil::slot_count> grid_kd;    ///< N*s/m; for Verlet already divided by dt
+    // The grid fabric's bending stencil (GridBending): interior weights, N/m.
+    float grid_bend_u, grid_bend_v, grid_twist;
 
     // SIMD-sliced CSR (general path).
     const std::uint32_t* __restrict slice_begin;
@@ -56,6 +58,14 @@ struct StepContext {
     const float* __restrict sell_rest;
     const float* __restrict sell_stiffness;
     const float* __restrict sell_damping;
+
+    // Bending (bending.hpp): Q's off-diagonal rows, SIMD-sliced; null when the cloth has no bending.
+    bool bending;
+    float bend_beta; ///< Rayleigh beta, s; for Verlet divided by dt (see damped_difference)
+    const std::uint32_t* __restrict bend_slice_begin;
+    const std::uint32_t* __restrict bend_slice_slots;
+    const std::uint32_t* __restrict bend_neighbour;
+    const float* __restrict bend_coefficient; ///< -Q_ij, N/m
 
     // Per-substep constants.
     float dt;      ///< s

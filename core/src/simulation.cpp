@@ -141,9 +141,14 @@ void Simulation::store_velocity(StateBuffer& s, std::size_t i, std::array<float,
 KernelPath Simulation::resolve_params(const SimulationParams& params) const {
     validate_params(params);
     KernelPath kernel = params.kernel;
-    if (kernel == KernelPath::automatic) kernel = cloth_.grid ? KernelPath::grid : KernelPath::csr;
+    // The grid kernel evaluates bending only in the grid fabric's closed form (GridBending).
+    const bool grid_bending = cloth_.bending.empty() || cloth_.bending.grid.has_value();
+    if (kernel == KernelPath::automatic) kernel = cloth_.grid && grid_bending ? KernelPath::grid : KernelPath::csr;
     if (kernel == KernelPath::grid && !cloth_.grid)
         throw InvalidInput("kernel 'grid' needs a regular-grid cloth; this cloth has no grid stencil (use csr)");
+    if (kernel == KernelPath::grid && !grid_bending)
+        throw InvalidInput("kernel 'grid' evaluates only the grid fabric's own bending stencil; this cloth's bending "
+                           "elements are general (use csr)");
     check_stability(cloth_, params);
     return kernel;
 }

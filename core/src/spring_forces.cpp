@@ -16,16 +16,22 @@ void spring_forces_impl(const StepContext& c, std::size_t begin, std::size_t end
 }
 } // namespace
 
+template <Integrator I, bool Extra>
+void spring_forces_dispatch(const StepContext& c, KernelPath path, std::size_t begin, std::size_t end) {
+    if (path == KernelPath::grid)
+        c.bending ? spring_forces_impl<I, GridFabric, Extra>(c, begin, end)
+                  : spring_forces_impl<I, GridSprings, Extra>(c, begin, end);
+    else
+        c.bending ? spring_forces_impl<I, CsrFabric, Extra>(c, begin, end)
+                  : spring_forces_impl<I, CsrSprings, Extra>(c, begin, end);
+}
+
 template <bool Extra>
 void spring_forces_dispatch(const StepContext& c, Integrator integrator, KernelPath path, std::size_t begin,
                             std::size_t end) {
-    const bool grid = path == KernelPath::grid;
-    if (integrator == Integrator::symplectic_euler)
-        grid ? spring_forces_impl<Integrator::symplectic_euler, GridSprings, Extra>(c, begin, end)
-             : spring_forces_impl<Integrator::symplectic_euler, CsrSprings, Extra>(c, begin, end);
-    else
-        grid ? spring_forces_impl<Integrator::verlet, GridSprings, Extra>(c, begin, end)
-             : spring_forces_impl<Integrator::verlet, CsrSprings, Extra>(c, begin, end);
+    integrator == Integrator::symplectic_euler
+        ? spring_forces_dispatch<Integrator::symplectic_euler, Extra>(c, path, begin, end)
+        : spring_forces_dispatch<Integrator::verlet, Extra>(c, path, begin, end);
 }
 
 void spring_forces_range(const StepContext& c, Integrator integrator, KernelPath path, bool seams, std::size_t begin,

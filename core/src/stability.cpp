@@ -83,18 +83,22 @@ StabilityBound stability_bound(const Cloth& cloth, float air_drag, const AeroWin
     StabilityBound b;
     for (const Edge& e : cloth.edges) {
         const SpringMaterial& m = cloth.material[static_cast<std::size_t>(e.kind)];
-        sum_k[e.a] += m.stiffness;
-        sum_k[e.b] += m.stiffness;
-        sum_kd[e.a] += m.damping;
-        sum_kd[e.b] += m.damping;
-        b.max_stiffness = std::max(b.max_stiffness, double(m.stiffness));
+        const double k = double(m.stiffness) * e.scale, kd = double(m.damping) * e.scale;
+        sum_k[e.a] += k;
+        sum_k[e.b] += k;
+        sum_kd[e.a] += kd;
+        sum_kd[e.b] += kd;
+        b.max_stiffness = std::max(b.max_stiffness, k);
     }
+    // Bending: K gets Q (x) I3, Gershgorin row sum sum_j |Q_ij|; Rayleigh damping beta Q adds beta times that.
+    const std::vector<double> q_rows = bending_row_sums(cloth.bending, n);
+    const double beta = cloth.bending.damping;
     double min_mass = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
         const double inv_m = cloth.inv_mass[i];
         if (inv_m == 0.0) continue; // pinned: does not move
-        b.omega2_max = std::max(b.omega2_max, 2.0 * sum_k[i] * inv_m + aero_t.omega2[i]);
-        b.gamma_max = std::max(b.gamma_max, 2.0 * sum_kd[i] * inv_m + aero_t.gamma[i]);
+        b.omega2_max = std::max(b.omega2_max, (2.0 * sum_k[i] + q_rows[i]) * inv_m + aero_t.omega2[i]);
+        b.gamma_max = std::max(b.gamma_max, (2.0 * sum_kd[i] + beta * q_rows[i]) * inv_m + aero_t.gamma[i]);
         b.aero_gamma_max = std::max(b.aero_gamma_max, aero_t.gamma[i]);
         const double m = 1.0 / inv_m;
         min_mass = min_mass == 0.0 ? m : std::min(min_mass, m);

@@ -45,14 +45,18 @@ void fused_block(const StepContext& c, std::size_t begin, std::size_t end, std::
 
 using FusedFn = void (*)(const StepContext&, std::size_t, std::size_t, std::size_t);
 
-template <Integrator I, bool Extra> FusedFn pick_fused(KernelPath path, bool wind) {
-    if (path == KernelPath::grid)
-        return wind ? fused_block<I, GridSprings, true, Extra> : fused_block<I, GridSprings, false, Extra>;
-    return wind ? fused_block<I, CsrSprings, true, Extra> : fused_block<I, CsrSprings, false, Extra>;
+template <Integrator I, class Springs, bool Extra> FusedFn pick_fused(bool wind) {
+    return wind ? fused_block<I, Springs, true, Extra> : fused_block<I, Springs, false, Extra>;
 }
 
-template <Integrator I> FusedFn pick_fused(KernelPath path, bool wind, bool seams) {
-    return seams ? pick_fused<I, true>(path, wind) : pick_fused<I, false>(path, wind);
+template <Integrator I, bool Extra> FusedFn pick_fused(KernelPath path, bool wind, bool bending) {
+    if (path == KernelPath::grid)
+        return bending ? pick_fused<I, GridFabric, Extra>(wind) : pick_fused<I, GridSprings, Extra>(wind);
+    return bending ? pick_fused<I, CsrFabric, Extra>(wind) : pick_fused<I, CsrSprings, Extra>(wind);
+}
+
+template <Integrator I> FusedFn pick_fused(KernelPath path, bool wind, bool seams, bool bending) {
+    return seams ? pick_fused<I, true>(path, wind, bending) : pick_fused<I, false>(path, wind, bending);
 }
 
 } // namespace
@@ -119,10 +123,24 @@ kernels::StepContext Simulation::make_context(std::size_t step_index) {
         for (std::size_t s = 0; s < GridStencil::slot_count; ++s) {
             const SpringMaterial& m = cl.material[static_cast<std::size_t>(g.kind[s])];
             c.grid_offset[s] = g.offset[s];
-            c.grid_k[s] = m.stiffness;
-            c.grid_krest[s] = m.stiffness * g.rest[s];
-            c.grid_kd[s] = params_.integrator == Integrator::verlet ? m.damping * c.inv_dt : m.damping;
+            // Edge::scale of the slot (1 in the springs model: the same bits as the material's own figures).
+            const float k = m.stiffness * g.scale[s], kd = m.damping * g.scale[s];
+            c.grid_k[s] = k;
+            c.grid_krest[s] = k * g.rest[s];
+            c.grid_kd[s] = params_.integrator == Integrator::verlet ? kd * c.inv_dt : kd;
         }
+    }
+    const BendingSet& bend = cl.bending;
+    c.bending = !bend.empty();
+    c.bend_beta = params_.integrator == Integrator::verlet ? bend.damping * c.inv_dt : bend.damping;
+    c.bend_slice_begin = bend.slice_begin.data();
+    c.bend_slice_slots = bend.slice_slots.data();
+    c.bend_neighbour = bend.sell_neighbour.data();
+    c.bend_coefficient = bend.sell_coefficient.data();
+    if (bend.grid) {
+        c.grid_bend_u = bend.grid->u;
+        c.grid_bend_v = bend.grid->v;
+        c.grid_twist = bend.grid->twist;
     }
     c.slice_begin = cl.graph.slice_begin.data();
     c.slice_slots = cl.graph.slice_slots.data();
@@ -148,6 +166,7 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
     const Integrator integ = params_.integrator;
     const bool wind = params_.wind.enabled;
     const bool seams = !cloth_.seams.empty(), aero = params_.aero.enabled, extra = extra_forces();
+    const bool bending = !cloth_.bending.empty();
     if (grabbed_ != SIZE_MAX && grab_target_ != grab_applied_) {
         // The user moved the grab: its speed enters the monitor's speed bound, and the work it did its energy
         // balance (restarted below, after the grabbed particle has moved).
@@ -168,8 +187,8 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
         if (seams) seam_forces_stage<Parallel>();
         if (params_.fused) {
             const kernels::FusedFn fn = integ == Integrator::symplectic_euler
-                                            ? kernels::pick_fused<Integrator::symplectic_euler>(kernel_, wind, extra)
-                                            : kernels::pick_fused<Integrator::verlet>(kernel_, wind, extra);
+                                            ? kernels::pick_fused<Integrator::symplectic_euler>(kernel_, wind, extra, bending)
+                                            : kernels::pick_fused<Integrator::verlet>(kernel_, wind, extra, bending);
             for_each_block<Parallel>(cloth_, [&](std::size_t b, std::size_t begin, std::size_t end) {
                 fn(c, begin, end, b);
             });

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 
 #include "drape/cloth.hpp"
 #include "drape/fabric.hpp"
@@ -56,6 +57,17 @@ struct SceneBuild {
     Cloth cloth;
     InitialState initial;
 };
+
+/// The fabric model's spring constants on a square grid (docs/fabric.md "Derived constants on a grid"): structural
+/// springs along u and v, both cell diagonals. Per unit width (resolution independent on a square grid): the
+/// continuum stiffness is C11 = ks_u + kd, C22 = ks_v + kd, C12 = C66 = kd, so kd = G and ks_u, ks_v give the
+/// free-sides tensile stiffnesses E_u = C11 - C12^2 / C22, E_v = C22 - C12^2 / C11. Throws InvalidInput (naming
+/// `what` and the fields) when the shear is too large for the stretch (a structural stiffness would be <= 0).
+struct GridMembrane {
+    float ks_u = 0.0f, ks_v = 0.0f; ///< N/m, a structural spring inside the cloth (a boundary one gets half)
+    float kd = 0.0f;                ///< N/m, a diagonal spring
+};
+GridMembrane grid_membrane(const Fabric& fabric, const std::string& what = "fabric");
 
 /// Builds the hang scene: cooked cloth with the grid stencil, and its initial state, positions relative to
 /// params.centre (= cloth.origin). Throws InvalidInput.

@@ -6,6 +6,9 @@
 //   w^2_max <= max_i 2 * sum_j k_ij / m_i, and likewise g_max <= kr + max_i 2 * sum_j kd_ij / m_i,
 // which holds for any deformation (a spring's Hessian never exceeds k along or across it when stretched).
 // dt_max solves w^2 dt^2 + 2 g dt = 4 with those bounds: conservative, and close to SPEC's ~sqrt(m/k).
+// k_ij is each spring's own stiffness (its kind's material times Edge::scale). The bending energy (bending.hpp) adds
+// Q (x) I3 to K, so row i gains sum_j |Q_ij| / m_i in w^2, and its Rayleigh damping beta Q adds beta sum_j |Q_ij| / m_i
+// to g (a spring's Rayleigh damping kd = beta k is already in sum kd).
 //
 // The aerodynamic wind (AeroWind, seed 004) is a drag quadratic in the relative speed. Linearised about v_rel, the
 // Jacobian of F_t = -1/2 rho C_d A_t |v_rel| (v_rel . n) n with respect to v_rel has norm <= rho C_d A_t |v_rel|
