@@ -51,7 +51,7 @@ class TextileTension : public ::testing::TestWithParam<bool> {};
 
 TEST_P(TextileTension, StrainIsLoadOverStiffnessWithinOnePercent) {
     TensionCase c;
-    c.fabric = textile_fabric("cotton");
+    c.fabric = textile_fabric("cotton_shirting");
     c.length = 0.1;
     c.spacing = 0.01;
     c.along_v = GetParam();

@@ -17,37 +17,21 @@ constexpr double g0 = 9.81;
 }
 
 Fabric textile_fabric(const std::string& name) {
-    // Stand-ins until the presets land: figures of the order of the published ones (KES-F), not presets.
-    Fabric f;
-    f.name = name;
-    if (name == "cotton") {
-        f.density = 0.12f;
-        f.stretch_u = 5000.0f;
-        f.stretch_v = 3000.0f;
-        f.shear = 30.0f;
-        f.bend_u = 4e-6f;
-        f.bend_v = 3e-6f;
-    } else if (name == "denim") {
-        f.density = 0.40f;
-        f.stretch_u = 20000.0f;
-        f.stretch_v = 10000.0f;
-        f.shear = 100.0f;
-        f.bend_u = 3e-5f;
-        f.bend_v = 2e-5f;
-    } else {
-        throw std::invalid_argument("textile_fabric: unknown fabric " + name);
-    }
-    return f;
+    const std::optional<Fabric> f = find_fabric(name);
+    if (!f) throw std::invalid_argument("unknown fabric preset " + name + " (drape materials lists them)");
+    return *f;
 }
 
 std::array<float, 3> particle_velocity(const Simulation& sim, std::size_t i) { return sim.velocity(i); }
 
-SettleStats settle(Simulation& sim, double max_time, double speed_tol, double check_every, int checks_needed) {
+SettleStats settle(Simulation& sim, double max_time, double speed_tol, double check_every, int checks_needed,
+                   const std::function<double(const Simulation&)>& probe, double probe_tol) {
     SettleStats st;
     st.dt = sim.params().dt;
     const auto chunk = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(check_every / st.dt)));
     const auto t0 = std::chrono::steady_clock::now();
     int quiet = 0;
+    double last = probe ? probe(sim) : 0.0;
     while (st.sim_time < max_time) {
         sim.step(chunk);
         st.steps += chunk;
@@ -58,7 +42,13 @@ SettleStats settle(Simulation& sim, double max_time, double speed_tol, double ch
             vmax = std::max(vmax, std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
         }
         st.max_speed = vmax;
-        quiet = vmax < speed_tol ? quiet + 1 : 0;
+        bool still = vmax < speed_tol;
+        if (probe) {
+            const double now = probe(sim);
+            still = still || std::fabs(now - last) < probe_tol;
+            last = now;
+        }
+        quiet = still ? quiet + 1 : 0;
         if (quiet >= checks_needed) {
             st.settled = true;
             break;
@@ -101,7 +91,12 @@ CantileverResult run_cantilever(const CantileverCase& c) {
     };
     for (std::uint32_t a = 0; a <= static_cast<std::uint32_t>(k); ++a)
         for (std::uint32_t b = 0; b < n; ++b) sim.set_pinned(at(a, b), true);
-    r.settle = settle(sim, c.max_time, 1e-4, 0.01, 5);
+    const auto tip_height = [&](const Simulation& s) {
+        double y = 0.0;
+        for (std::uint32_t b = 0; b < n; ++b) y += s.y()[at(n - 1, b)];
+        return y / n;
+    };
+    r.settle = settle(sim, c.max_time, 1e-4, 0.01, 5, tip_height, 1e-6 * l);
 
     // Column (row) means along the strip: position along it and height.
     auto mean_at = [&](std::uint32_t a, double& along, double& up) {
@@ -191,7 +186,12 @@ TensionResult run_tension(const TensionCase& c) {
     for (std::uint32_t b = 0; b < n; ++b) start[b] = c.along_v ? scene.initial.z[at(n - 1, b)] : scene.initial.x[at(n - 1, b)];
     Simulation sim(std::move(scene.cloth), scene.initial, sp);
     for (std::uint32_t b = 0; b < n; ++b) sim.set_pinned(at(0, b), true);
-    r.settle = settle(sim, c.max_time, 1e-5, 0.01, 5);
+    const auto end_position = [&](const Simulation& s) {
+        double p = 0.0;
+        for (std::uint32_t b = 0; b < n; ++b) p += c.along_v ? s.z()[at(n - 1, b)] : s.x()[at(n - 1, b)];
+        return p / n;
+    };
+    r.settle = settle(sim, c.max_time, 1e-5, 0.01, 5, end_position, 1e-6 * L * c.strain);
     double moved = 0.0;
     for (std::uint32_t b = 0; b < n; ++b) {
         const std::size_t i = at(n - 1, b);

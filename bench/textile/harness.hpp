@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -13,7 +14,7 @@
 
 namespace drape::textile {
 
-/// Fabrics the harness uses: the presets (find_fabric) when they exist, else the harness's own figures.
+/// A fabric preset by name (find_fabric); throws std::invalid_argument naming an unknown one.
 Fabric textile_fabric(const std::string& name);
 
 /// Velocity of particle i, m/s, whatever the integrator stores (the one place that reads integrator state).
@@ -29,10 +30,13 @@ struct SettleStats {
     bool settled = false;     ///< max speed fell below the tolerance before the time limit
 };
 
-/// Steps until the fastest particle is slower than `speed_tol` (m/s) at `checks_needed` checks in a row (checks every
-/// `check_every` s of simulated time), or `max_time` s.
+/// Steps until, at `checks_needed` checks in a row (every `check_every` s of simulated time), the fastest particle is
+/// slower than `speed_tol` (m/s) or the measured figure `probe` (when given) moved less than `probe_tol` since the
+/// previous check; or until `max_time` s. (Float32 state keeps light particles jittering at ~1 mm/s around a stiff
+/// equilibrium, so a test that measures one figure settles on that figure.)
 SettleStats settle(Simulation& sim, double max_time, double speed_tol, double check_every = 0.01,
-                   int checks_needed = 3);
+                   int checks_needed = 3, const std::function<double(const Simulation&)>& probe = {},
+                   double probe_tol = 0.0);
 
 // --- Peirce cantilever (ASTM D1388) ------------------------------------------------------------------------------
 struct CantileverCase {
