@@ -17,15 +17,18 @@ namespace {
 
 using namespace drape;
 
-/// One simulation per (N, kernel, fused), cooked on first use and kept for the whole run.
-Simulation& simulation(std::uint32_t n, KernelPath kernel, bool fused) {
-    static std::map<std::tuple<std::uint32_t, KernelPath, bool>, std::unique_ptr<Simulation>> cache;
+/// One simulation per (N, kernel, fused, model), cooked on first use and kept for the whole run.
+Simulation& simulation(std::uint32_t n, KernelPath kernel, bool fused, MaterialModel model = MaterialModel::springs) {
+    static std::map<std::tuple<std::uint32_t, KernelPath, bool, MaterialModel>, std::unique_ptr<Simulation>> cache;
     static std::mutex mutex;
     std::lock_guard lock(mutex);
-    auto& slot = cache[{n, kernel, fused}];
+    auto& slot = cache[{n, kernel, fused, model}];
     if (!slot) {
         HangParams hp;
         hp.n = n;
+        // Fabric: the default Fabric with Rayleigh damping on (the kernel's cost does not depend on the figures).
+        hp.model = model;
+        hp.fabric.damping = 1e-4f;
         SceneBuild scene = build_hang_scene(hp);
         SimulationParams sp;
         sp.dt = static_cast<float>(default_dt(scene.cloth, sp.air_drag));
@@ -62,10 +65,10 @@ void set_labels(benchmark::State& state, const Simulation& sim, std::size_t subs
 }
 
 /// Full substep (BENCH.md figure 1). Args: N, threads.
-void run_substep(benchmark::State& state, KernelPath kernel, bool fused) {
+void run_substep(benchmark::State& state, KernelPath kernel, bool fused, MaterialModel model = MaterialModel::springs) {
     const auto n = static_cast<std::uint32_t>(state.range(0));
     Workers& w = workers(state.range(1));
-    Simulation& sim = simulation(n, kernel, fused);
+    Simulation& sim = simulation(n, kernel, fused, model);
     const std::size_t k = substeps_per_iteration(sim.cloth().particle_count);
     w.run([&] {
         sim.step(k); // warm-up: caches, thread pool
@@ -74,11 +77,20 @@ void run_substep(benchmark::State& state, KernelPath kernel, bool fused) {
     });
     set_labels(state, sim, k);
     state.counters["threads"] = double(w.workers());
+    state.counters["bending_elements"] = double(sim.cloth().bending.elements.size());
 }
 
 void BM_Substep(benchmark::State& state) { run_substep(state, KernelPath::grid, true); }
 void BM_SubstepCsr(benchmark::State& state) { run_substep(state, KernelPath::csr, true); }
 void BM_SubstepStaged(benchmark::State& state) { run_substep(state, KernelPath::grid, false); }
+/// The fabric model (membrane springs + bending stencil + Rayleigh damping) on the fused grid kernel: compare with
+/// BM_Substep at the same N and threads (docs/performance.md, "Fabric model").
+void BM_SubstepFabric(benchmark::State& state) {
+    run_substep(state, KernelPath::grid, true, MaterialModel::fabric);
+}
+void BM_SubstepFabricCsr(benchmark::State& state) {
+    run_substep(state, KernelPath::csr, true, MaterialModel::fabric);
+}
 
 /// One pipeline stage alone (staged form). Args: stage, N, threads.
 void BM_Stage(benchmark::State& state) {
@@ -149,6 +161,18 @@ BENCHMARK(BM_Substep)
 BENCHMARK(BM_SubstepCsr)
     ->ArgNames({"N", "threads"})
     ->Apply([](auto* b) { thread_args(b, {100, 316}); })
+    ->UseRealTime()
+    ->MinTime(1.0)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SubstepFabric)
+    ->ArgNames({"N", "threads"})
+    ->Apply([](auto* b) { thread_args(b, {100, 316, 1000}); })
+    ->UseRealTime()
+    ->MinTime(1.0)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SubstepFabricCsr)
+    ->ArgNames({"N", "threads"})
+    ->Apply([](auto* b) { thread_args(b, {316}); })
     ->UseRealTime()
     ->MinTime(1.0)
     ->Unit(benchmark::kMillisecond);

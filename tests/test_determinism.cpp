@@ -131,11 +131,13 @@ TEST(SceneDeterminism, ScenesUseTheStagesTheyClaim) {
 
 // Hang variants at a larger size (10 blocks): wind on and off, both integrators, both kernels.
 std::uint64_t hang_checksum(int workers, std::uint32_t n, bool wind, Integrator integ, KernelPath kernel,
-                            std::size_t steps = 200) {
+                            std::size_t steps = 200, MaterialModel model = MaterialModel::springs) {
     Workers arena(workers);
     return arena.run([&] {
         HangParams hp;
         hp.n = n;
+        hp.model = model;
+        hp.fabric.damping = 1e-4f; // Rayleigh damping of springs and bending
         SceneBuild scene = build_hang_scene(hp);
         SimulationParams p = drape::testing::default_params(scene.cloth, integ, kernel);
         p.wind.enabled = wind;
@@ -177,6 +179,21 @@ INSTANTIATE_TEST_SUITE_P(Variants, Determinism,
                              return std::string(integrator_name(info.param.integ)) + (info.param.wind ? "_wind_" : "_") +
                                     kernel_path_name(info.param.kernel);
                          });
+
+// The fabric model (per-edge stiffness, bending from the grid stencil or Q's rows, Rayleigh damping), at 10 blocks.
+TEST(Determinism, FabricModelIndependentOfWorkerCount) {
+    for (KernelPath kernel : {KernelPath::grid, KernelPath::csr})
+        for (Integrator integ : {Integrator::symplectic_euler, Integrator::verlet}) {
+            const std::uint64_t one = hang_checksum(1, 100, true, integ, kernel, 200, MaterialModel::fabric);
+            for (int w : {3, 8})
+                EXPECT_EQ(one, hang_checksum(w, 100, true, integ, kernel, 200, MaterialModel::fabric))
+                    << kernel_path_name(kernel) << " " << integrator_name(integ) << ": " << w << " workers";
+            if (kernel == KernelPath::grid && integ == Integrator::symplectic_euler)
+                EXPECT_NE(one, hang_checksum(1, 100, true, integ, kernel, 200)) << "the fabric model differs from springs";
+            std::printf("[ checksum ] fabric N=100 200 substeps %s wind %s: %016llx (1, 3, 8 workers)\n",
+                        integrator_name(integ), kernel_path_name(kernel), static_cast<unsigned long long>(one));
+        }
+}
 
 TEST(Determinism, OddSizeWithPartialBatch) {
     const std::uint64_t one = hang_checksum(1, 77, true, Integrator::symplectic_euler, KernelPath::grid);

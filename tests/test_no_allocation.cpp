@@ -67,6 +67,7 @@ struct AllocCase {
     bool fused;
     Integrator integ;
     bool wind;
+    MaterialModel model = MaterialModel::springs;
 };
 
 class NoAllocation : public ::testing::TestWithParam<AllocCase> {};
@@ -77,6 +78,8 @@ TEST_P(NoAllocation, StepDoesNotAllocate) {
     workers.run([&] {
         HangParams hp;
         hp.n = 100;
+        hp.model = c.model; // fabric: bending (grid stencil or Q rows), per-edge stiffness, Rayleigh damping
+        hp.fabric.damping = 1e-4f;
         SceneBuild scene = build_hang_scene(hp);
         SimulationParams p = drape::testing::default_params(scene.cloth, c.integ, c.kernel);
         p.fused = c.fused;
@@ -106,7 +109,10 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(AllocCase{KernelPath::grid, true, Integrator::symplectic_euler, false},
                       AllocCase{KernelPath::grid, true, Integrator::verlet, true},
                       AllocCase{KernelPath::csr, true, Integrator::symplectic_euler, true},
-                      AllocCase{KernelPath::grid, false, Integrator::symplectic_euler, true}));
+                      AllocCase{KernelPath::grid, false, Integrator::symplectic_euler, true},
+                      AllocCase{KernelPath::grid, true, Integrator::symplectic_euler, true, MaterialModel::fabric},
+                      AllocCase{KernelPath::grid, false, Integrator::verlet, false, MaterialModel::fabric},
+                      AllocCase{KernelPath::csr, true, Integrator::symplectic_euler, false, MaterialModel::fabric}));
 
 // The viewer's strain-colouring stage runs every frame: cooked once, then compute() allocates nothing.
 TEST(NoAllocation, StrainFieldComputeDoesNotAllocate) {

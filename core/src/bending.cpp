@@ -79,19 +79,51 @@ void set_bending(Cloth& cloth, std::vector<BendElement> elements, float damping)
 
     BendingSet b;
     b.damping = damping;
-    // Off-diagonal Q per row (the diagonal follows from the zero row sum).
-    const std::vector<BendTriplet> q = bending_hessian(elements, n);
-    b.offsets.assign(n + 1, 0);
-    for (const BendTriplet& t : q)
-        if (t.row != t.col) ++b.offsets[t.row + 1];
-    for (std::size_t i = 0; i < n; ++i) b.offsets[i + 1] += b.offsets[i];
-    b.neighbour.reserve(b.offsets[n]);
-    b.value.reserve(b.offsets[n]);
-    for (const BendTriplet& t : q) // sorted by (row, col): rows come out in order, sorted by neighbour
-        if (t.row != t.col) {
-            b.neighbour.push_back(t.col);
-            b.value.push_back(t.value);
+    // Off-diagonal Q per row (the diagonal follows from the zero row sum), assembled row by row from each particle's
+    // elements (a few hundred bytes per particle at most, not the 16 triplets per element of bending_hessian). The
+    // terms of an entry are summed in element order, then slot order: the same sums as bending_hessian.
+    std::vector<std::uint32_t> inc_offsets(n + 1, 0), inc;
+    auto for_each_particle_once = [&](const BendElement& e, auto&& f) {
+        for (std::size_t a = 0; a < 4; ++a) {
+            if (e.c[a] == 0.0f) continue;
+            bool seen = false;
+            for (std::size_t b = 0; b < a; ++b) seen = seen || (e.c[b] != 0.0f && e.v[b] == e.v[a]);
+            if (!seen) f(e.v[a]);
         }
+    };
+    for (const BendElement& e : elements) for_each_particle_once(e, [&](std::uint32_t i) { ++inc_offsets[i + 1]; });
+    for (std::size_t i = 0; i < n; ++i) inc_offsets[i + 1] += inc_offsets[i];
+    inc.resize(inc_offsets[n]);
+    {
+        std::vector<std::uint32_t> fill(inc_offsets.begin(), inc_offsets.end() - 1);
+        for (std::uint32_t k = 0; k < elements.size(); ++k)
+            for_each_particle_once(elements[k], [&](std::uint32_t i) { inc[fill[i]++] = k; });
+    }
+    b.offsets.assign(n + 1, 0);
+    std::vector<std::pair<std::uint32_t, double>> row;
+    for (std::size_t i = 0; i < n; ++i) {
+        row.clear();
+        for (std::uint32_t k = inc_offsets[i]; k < inc_offsets[i + 1]; ++k) {
+            const BendElement& e = elements[inc[k]];
+            for (std::size_t a = 0; a < 4; ++a) {
+                if (e.v[a] != i) continue;
+                for (std::size_t c2 = 0; c2 < 4; ++c2) {
+                    const double v = double(e.weight) * e.c[a] * e.c[c2];
+                    if (v != 0.0 && e.v[c2] != i) row.emplace_back(e.v[c2], v);
+                }
+            }
+        }
+        std::stable_sort(row.begin(), row.end(), [](const auto& l, const auto& r) { return l.first < r.first; });
+        for (std::size_t k = 0; k < row.size(); ++k) {
+            if (k > 0 && row[k].first == row[k - 1].first) {
+                b.value.back() += row[k].second;
+            } else {
+                b.neighbour.push_back(row[k].first);
+                b.value.push_back(row[k].second);
+            }
+        }
+        b.offsets[i + 1] = static_cast<std::uint32_t>(b.neighbour.size());
+    }
 
     // SELL-C over the padded particle range, as SpringGraph (spring_graph.hpp).
     constexpr std::size_t C = simd::width;

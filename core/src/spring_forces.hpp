@@ -167,12 +167,16 @@ struct GridFabric {
             const fbatch uj = simd::loadu(c.u + q), vj = simd::loadu(c.v + q), wj = simd::loadu(c.w + q);
             const bool spring = slot != grid_slot::up2 && slot != grid_slot::left2 && slot != grid_slot::right2 &&
                                 slot != grid_slot::down2;
+            const bool structural = slot == grid_slot::up || slot == grid_slot::left || slot == grid_slot::right ||
+                                    slot == grid_slot::down;
             if (spring) {
-                const fbatch hf =
-                    simd::select(simd::test_bits(mask, 1u << (GridStencil::half_bit + slot)), half, one);
                 Vec3b d;
-                fbatch coef = spring_coefficient<I>(s, xj, yj, zj, uj, vj, wj, fbatch(c.grid_k[slot]) * hf,
-                                                    fbatch(c.grid_krest[slot]) * hf, fbatch(c.grid_kd[slot]) * hf, d);
+                fbatch coef = spring_coefficient<I>(s, xj, yj, zj, uj, vj, wj, fbatch(c.grid_k[slot]),
+                                                    fbatch(c.grid_krest[slot]), fbatch(c.grid_kd[slot]), d);
+                // Half stiffness (a boundary edge): the coefficient is linear in k, k l0 and kd, and halving is exact
+                // in float, so halving it gives the bits of the CSR path's halved constants.
+                if (structural)
+                    coef = coef * simd::select(simd::test_bits(mask, 1u << (GridStencil::half_bit + slot)), half, one);
                 coef = simd::select(simd::test_bits(mask, 1u << slot), coef, zero);
                 f.x = simd::fma(coef, d.x, f.x);
                 f.y = simd::fma(coef, d.y, f.y);

@@ -23,6 +23,8 @@
 //   the wind field, or takes all the elastic energy stored at the baseline (a grab that jumped, seams that start
 //   stretched) into the lightest particle: v_ref = v_b + sqrt(2 E_el_b / m_min) + sqrt(2 (|g| + a_max)
 //   (diagonal_b + |c - c_b|)) + 2 |aero wind| + the grab's speed + 1 m/s; speed bound = speed_factor x v_ref.
+// E_el is every spring's 1/2 k (l - l0)^2 (k = material x Edge::scale) plus the bending energy (bending.hpp), computed
+//   at each baseline.
 // Cost: one pass over the particles (fixed blocks, partial sums combined in block order: the figures are bitwise
 // identical for any thread count) and one over the structural springs, every check_every substeps, plus a copy of
 // the state (the restore point). No allocation after construction.

@@ -2,7 +2,8 @@
 //
 // One substep (DESIGN.md), each stage a function over spans of the SoA arrays, in core/src/<stage>.cpp:
 //   1. external_forces  gravity, air drag, analytic wind field
-//   2. spring_forces    Hooke springs and spring damping, CSR gather (or the regular-grid stencil)
+//   2. spring_forces    Hooke springs and spring damping, CSR gather (or the regular-grid stencil); in the fabric
+//                       model also the bending forces -Q (x + beta v) (bending.hpp)
 //   3. integrate        symplectic Euler or position Verlet; pins (inverse mass 0) never move
 // Stages 1-3 are fused into one pass over memory (core/src/substep.cpp); the staged form runs each stage as its own
 // pass and serves as the reference and for per-stage benchmarks. State is double-buffered: a substep reads buffer
