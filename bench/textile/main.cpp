@@ -6,8 +6,11 @@
 //   drape_textile cusick [--png DIR]    Cusick drape test (ISO 9073-9 geometry) per fabric, three resolutions
 //   drape_textile hang                  hang scene convergence, N = 32, 64, 128 [256]
 //   drape_textile verlet                Verlet against symplectic Euler at rest, N = 32
-// Option --threads T (default 1): worker threads.
+// Options: --threads T (default 1) worker threads; --fabric NAME (repeatable) presets; --quick coarse only; --fine
+// adds the finest resolution; --png DIR (cusick) top views; --n N (repeatable, hang) grid sizes; --static (hang) the
+// settled shape only, no swing.
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -57,6 +60,8 @@ int main(int argc, char** argv) {
         else if (s == "--quick") opt.quick = true;
         else if (s == "--fine") opt.fine = true;
         else if (s == "--png" && a + 1 < argc) opt.png_dir = argv[++a];
+        else if (s == "--static") opt.static_only = true;
+        else if (s == "--n" && a + 1 < argc) opt.sizes.push_back(static_cast<std::uint32_t>(std::atoi(argv[++a])));
         else if (s == "--fabric" && a + 1 < argc) opt.fabrics.push_back(argv[++a]);
         else {
             std::fprintf(stderr, "drape_textile: unknown option %s\n", s.c_str());

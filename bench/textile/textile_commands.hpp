@@ -1,6 +1,7 @@
 // drape_textile's subcommands, one file each (bench/textile/cmd_*.cpp).
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,8 @@ struct Options {
     int threads = 1;
     bool quick = false; ///< coarse spacings only
     bool fine = false;  ///< add the finest (slow) resolution
+    bool static_only = false; ///< hang: settle from flat without the swing
+    std::vector<std::uint32_t> sizes; ///< hang: grid sizes (default 32, 64, 128)
     std::string png_dir;
     std::vector<std::string> fabrics;
 };
