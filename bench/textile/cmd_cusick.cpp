@@ -79,6 +79,7 @@ int cmd_cusick(const Options& opt) {
         for (const FabricPreset& p : fabric_presets()) fabrics.push_back(p.fabric.name);
     std::vector<double> spacings = opt.quick ? std::vector<double>{0.02, 0.01} : std::vector<double>{0.02, 0.01, 0.005};
     if (opt.fine) spacings.push_back(0.0025);
+    if (!opt.spacings.empty()) spacings = opt.spacings;
     const double drag = 2.0, max_time = 6.0;
     std::printf("Cusick drape test: square specimen %.0f cm (grid cloth), disc radius %.0f mm (collision margin 1 mm, "
                 "friction 0.6), dropped from 3 mm above, air drag %.1f 1/s, settled (max speed < 1 mm/s, or the mean height still to 0.1 um per 20 ms, at 5 checks in a row; else 6 s); shadow "

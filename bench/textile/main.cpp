@@ -8,7 +8,7 @@
 //   drape_textile verlet                Verlet against symplectic Euler at rest, N = 32
 // Options: --threads T (default 1) worker threads; --fabric NAME (repeatable) presets; --quick coarse only; --fine
 // adds the finest resolution; --png DIR (cusick) top views; --n N (repeatable, hang) grid sizes; --static (hang) the
-// settled shape only, no swing.
+// settled shape only, no swing; --spacing H (repeatable, cusick) grid spacings in m.
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
@@ -61,6 +61,7 @@ int main(int argc, char** argv) {
         else if (s == "--fine") opt.fine = true;
         else if (s == "--png" && a + 1 < argc) opt.png_dir = argv[++a];
         else if (s == "--static") opt.static_only = true;
+        else if (s == "--spacing" && a + 1 < argc) opt.spacings.push_back(std::atof(argv[++a]));
         else if (s == "--n" && a + 1 < argc) opt.sizes.push_back(static_cast<std::uint32_t>(std::atoi(argv[++a])));
         else if (s == "--fabric" && a + 1 < argc) opt.fabrics.push_back(argv[++a]);
         else {

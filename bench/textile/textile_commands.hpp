@@ -13,6 +13,7 @@ struct Options {
     bool fine = false;  ///< add the finest (slow) resolution
     bool static_only = false; ///< hang: settle from flat without the swing
     std::vector<std::uint32_t> sizes; ///< hang: grid sizes (default 32, 64, 128)
+    std::vector<double> spacings;     ///< cusick: grid spacings, m (default 0.02, 0.01, 0.005)
     std::string png_dir;
     std::vector<std::string> fabrics;
 };
