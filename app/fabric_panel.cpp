@@ -7,6 +7,7 @@
 #include <imgui_internal.h>
 
 #include "drape/fabric.hpp"
+#include "materials.hpp"
 #include "view_app.hpp"
 
 namespace drape::app {
@@ -68,9 +69,11 @@ void Viewer::ui_fabric_material() {
                           "Rayleigh damping. A committed value rebuilds the cloth in the background; the motion\n"
                           "continues. The same fabric behaves the same at every resolution.");
     // What the engine derived from the fabric and the mesh: the seeds' per-node mass and per-spring stiffness.
+    const DerivedMaterial d = derive_material(s.sim().cloth());
     ImGui::TextDisabled("derived: node mass %.4g g", double(f.node_mass_g));
-    ImGui::TextDisabled("  k structural %.4g, shear %.4g, bend %.4g N/m", double(f.stiffness[0]),
-                        double(f.stiffness[1]), double(f.stiffness[2]));
+    for (std::size_t k = 0; k < 2; ++k) // structural, shear: per spring (boundary springs hold half)
+        ImGui::TextDisabled("  %s k %.4g - %.4g N/m", spring_kind_name(static_cast<SpringKind>(k)),
+                            double(d.spring_min[k]), double(d.spring_max[k]));
 }
 
 } // namespace drape::app

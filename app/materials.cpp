@@ -10,6 +10,19 @@
 
 namespace drape::app {
 
+namespace {
+
+/// A spring's own stiffness factor (Edge::scale, where the build has one: the fabric model's per-spring share of the
+/// membrane), else 1.
+template <class E> float spring_factor(const E& e) {
+    if constexpr (requires { e.scale; })
+        return static_cast<float>(e.scale);
+    else
+        return 1.0f;
+}
+
+} // namespace
+
 DerivedMaterial derive_material(const Cloth& cloth) {
     DerivedMaterial d;
     const std::size_t n = cloth.particle_count;
@@ -32,7 +45,16 @@ DerivedMaterial derive_material(const Cloth& cloth) {
     for (std::size_t k = 0; k < spring_kind_count; ++k) {
         d.stiffness[k] = cloth.material[k].stiffness;
         d.damping[k] = cloth.material[k].damping;
+        d.spring_min[k] = std::numeric_limits<float>::max();
     }
+    for (const Edge& e : cloth.edges) {
+        const auto k = static_cast<std::size_t>(e.kind);
+        const float ks = d.stiffness[k] * spring_factor(e);
+        d.spring_min[k] = std::min(d.spring_min[k], ks);
+        d.spring_max[k] = std::max(d.spring_max[k], ks);
+    }
+    for (std::size_t k = 0; k < spring_kind_count; ++k)
+        if (d.spring_min[k] > d.spring_max[k]) d.spring_min[k] = 0.0f; // no spring of this kind
     return d;
 }
 
@@ -61,17 +83,21 @@ nlohmann::ordered_json material_report(const SceneSpec& spec, const Cloth& cloth
         j["damping_ratio"] = spec.damping_ratio;
     }
     const DerivedMaterial d = derive_material(cloth);
-    nlohmann::ordered_json k, kd;
+    nlohmann::ordered_json k, kd, lo, hi;
     for (std::size_t s = 0; s < spring_kind_count; ++s) {
         const char* name = spring_kind_name(static_cast<SpringKind>(s));
         k[name] = d.stiffness[s];
         kd[name] = d.damping[s];
+        lo[name] = d.spring_min[s];
+        hi[name] = d.spring_max[s];
     }
     j["derived"] = {{"node_mass_g", d.node_mass_g_mean},
                     {"node_mass_g_min", d.node_mass_g_min},
                     {"node_mass_g_max", d.node_mass_g_max},
                     {"spring_k", k},
-                    {"spring_damping", kd}};
+                    {"spring_damping", kd},
+                    {"spring_k_min", lo},
+                    {"spring_k_max", hi}};
     return j;
 }
 

@@ -15,8 +15,12 @@ namespace drape::app {
 /// What the engine derived from the material and the mesh (the seeds' units: grams per particle, N/m per spring).
 struct DerivedMaterial {
     double node_mass_g_mean = 0.0, node_mass_g_min = 0.0, node_mass_g_max = 0.0; ///< free particles' masses, g
-    std::array<float, spring_kind_count> stiffness{}; ///< N/m per spring kind (structural, shear, bend, seam)
-    std::array<float, spring_kind_count> damping{};   ///< N*s/m per spring kind
+    /// N/m per spring kind (structural, shear, bend, seam): the kind's material (Cloth::material)
+    std::array<float, spring_kind_count> stiffness{};
+    std::array<float, spring_kind_count> damping{}; ///< N*s/m per spring kind: the kind's material
+    /// N/m, the smallest and largest stiffness of one spring of each kind (the material times the spring's own
+    /// factor where the model gives each spring its share, e.g. half on a boundary edge); 0 for a kind with none
+    std::array<float, spring_kind_count> spring_min{}, spring_max{};
 };
 DerivedMaterial derive_material(const Cloth& cloth);
 

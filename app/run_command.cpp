@@ -257,10 +257,11 @@ int run_command(const RunOptions& o) {
                     static_cast<unsigned long long>(done), sim.time());
         const DerivedMaterial d = derive_material(sim.cloth());
         if (spec.model == MaterialModel::fabric)
-            std::printf("  material: fabric '%s' (%.4g g/m^2); derived node mass %.4g g, spring k structural %.4g, "
-                        "shear %.4g, bend %.4g N/m\n",
+            std::printf("  material: fabric '%s' (%.4g g/m^2); derived node mass %.4g g, spring k structural "
+                        "%.4g-%.4g, shear %.4g-%.4g N/m\n",
                         spec.fabric.name.c_str(), double(spec.fabric.density) * fabric_gsm_per_kg_m2,
-                        d.node_mass_g_mean, double(d.stiffness[0]), double(d.stiffness[1]), double(d.stiffness[2]));
+                        d.node_mass_g_mean, double(d.spring_min[0]), double(d.spring_max[0]),
+                        double(d.spring_min[1]), double(d.spring_max[1]));
         else
             std::printf("  material: springs, node mass %.4g g, spring k structural %.4g, shear %.4g, bend %.4g N/m\n",
                         d.node_mass_g_mean, double(d.stiffness[0]), double(d.stiffness[1]), double(d.stiffness[2]));

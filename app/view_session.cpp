@@ -231,8 +231,10 @@ ViewSession::Built ViewSession::build(Snapshot t, const KeepState* keep_state, b
     if (fabric) {
         // The builder derived every per-element value from the fabric and the mesh: shown, not imposed.
         const DerivedMaterial d = derive_material(cloth);
+        const float seam = t.fabric.stiffness[static_cast<std::size_t>(SpringKind::seam)]; // the user's, kept
         t.fabric.node_mass_g = static_cast<float>(d.node_mass_g_mean);
         t.fabric.stiffness = d.stiffness;
+        t.fabric.stiffness[static_cast<std::size_t>(SpringKind::seam)] = seam;
         t.fabric.derived_damping = d.damping;
     } else {
         // The exact node mass now that the count is known (the T-shirt's estimate may differ).

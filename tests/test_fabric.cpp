@@ -11,6 +11,8 @@
 #include "drape/scene.hpp"
 #include "drape/scene_hang.hpp"
 #include "drape/scene_write.hpp"
+#include "drape/stability.hpp"
+#include "materials.hpp"
 
 using namespace drape;
 
@@ -71,6 +73,36 @@ TEST(Fabric, DenimIsConvertedFromItsKesFigures) {
     EXPECT_NEAR(d.density * fabric_gsm_per_kg_m2, 270.0, 1e-3);
 }
 
+TEST(Fabric, WoolIsConvertedFromItsFastFigures) {
+    // FAST (docs/fabric.md "Units: from FAST figures"): E100 4.60 / 5.87 % at 100 gf/cm, G 26.17 N/m, B in uN*m.
+    const Fabric w = *find_fabric("wool");
+    const double load = 100.0 * 9.80665e-3 / 0.01; // 98.07 N/m
+    EXPECT_NEAR(w.stretch_u, load / 0.0460, 0.1);
+    EXPECT_NEAR(w.stretch_v, load / 0.0587, 0.1);
+    EXPECT_NEAR(w.shear, 26.17, 1e-4);
+    EXPECT_NEAR(w.bend_u * fabric_uNm_per_Nm, 5.56, 1e-5);
+    EXPECT_NEAR(w.density * fabric_gsm_per_kg_m2, 168.0, 1e-3);
+    // the source's own measured warp bending length, 15.00 mm, back from B and W (Peirce: c^3 = B / (W g))
+    EXPECT_NEAR(std::cbrt(double(w.bend_u) / (double(w.density) * 9.80665)), 0.0150, 1e-4);
+}
+
+TEST(Fabric, JerseyIsWangsGrayInterlockAtZeroStrain) {
+    // ARCSim's reading of Wang et al. 2011 (docs/fabric.md "Units: from Wang ..."): k = 2 x stretching row 0,
+    // energy per area 1/2 (k0 e00^2 + 2 k1 e00 e11 + k2 e11^2 + k3 e01^2). A strip pulled along u with its sides free
+    // (zero tension across: k1 e00 + k2 e11 = 0) carries k0 e00 + k1 e11 per unit width.
+    const double k0 = 2 * 16.593832, k1 = 2 * -14.695990, k2 = 2 * 34.477123, k3 = 2 * 36.860302;
+    const Fabric j = *find_fabric("jersey");
+    const double e00 = 1e-3, e11 = -k1 * e00 / k2;
+    EXPECT_NEAR(j.stretch_u, (k0 * e00 + k1 * e11) / e00, 1e-3);
+    const double f11 = 1e-3, f00 = -k1 * f11 / k0;
+    EXPECT_NEAR(j.stretch_v, (k2 * f11 + k1 * f00) / f11, 1e-3);
+    // simple shear by an angle g: e01 = g / 2, energy 1/2 k3 (g/2)^2 = 1/2 G g^2
+    EXPECT_NEAR(j.shear, k3 / 4.0, 1e-4);
+    EXPECT_NEAR(j.density * fabric_gsm_per_kg_m2, 187.0, 1e-3);
+    EXPECT_NEAR(j.bend_v, 23.191698e-6, 1e-11); // hinges along u (ARCSim's row 0)
+    EXPECT_NEAR(j.bend_u, 14.267624e-6, 1e-11);
+}
+
 TEST(Fabric, DampingKeepsTheStiffestModeLightlyDamped) {
     // beta / dt_grid <= 0.03 at h = 1 cm, dt_grid = h / (2 sqrt(stretch / density)).
     for (const FabricPreset& p : fabric_presets()) {
@@ -79,6 +111,33 @@ TEST(Fabric, DampingKeepsTheStiffestModeLightlyDamped) {
         const double dt = 0.01 / (2.0 * c);
         EXPECT_GT(f.damping, 0.0f) << f.name;
         EXPECT_LE(f.damping / dt, 0.0301) << f.name;
+    }
+}
+
+TEST(Fabric, PresetDampingLowersAGridsBoundByAFewPercent) {
+    // The claim of docs/fabric.md "Damping of the presets", checked with the engine's own bound: a 1 m grid at the
+    // hang scene's N = 100 (h ~ 1 cm) with the preset's node mass (density h^2) and springs of stiffness = the
+    // preset's stretch (structural; shear and bend springs at half and a tenth), damped kd = beta k (Rayleigh), vs
+    // the same undamped. (The fabric model's own membrane and bending terms are the grid builder's.)
+    for (const FabricPreset& preset : fabric_presets()) {
+        const Fabric& f = preset.fabric;
+        HangParams p;
+        p.n = 100;
+        p.total_mass = f.density * 1.0f; // 1 m^2
+        p.pins = GridPins::none;
+        SceneBuild b = build_hang_scene(p);
+        const float k = std::max(f.stretch_u, f.stretch_v);
+        std::array<SpringMaterial, spring_kind_count> m{};
+        m[0] = {k, 0.0f};
+        m[1] = {0.5f * k, 0.0f};
+        m[2] = {0.1f * k, 0.0f};
+        apply_materials(b.cloth, m);
+        const double undamped = stability_bound(b.cloth, 0.0f).dt_max;
+        for (auto& x : m) x.damping = f.damping * x.stiffness;
+        apply_materials(b.cloth, m);
+        const double damped = stability_bound(b.cloth, 0.0f).dt_max;
+        EXPECT_GT(damped / undamped, 0.95) << f.name;
+        EXPECT_LT(damped / undamped, 1.0) << f.name; // the damping is there, and costs something
     }
 }
 
@@ -292,4 +351,31 @@ TEST(PhysicalPins, ClipsStayAtTheirCorners) {
         }
     p.pin_radius = 1.5f;
     EXPECT_THROW((void)build_hang_scene(p), InvalidInput);
+}
+
+TEST(Fabric, DerivedValuesOfABuiltCloth) {
+    // What `drape run --json` and the viewer's Fabric panel show in the seeds' units: grams per particle and N/m
+    // per spring, read from the built cloth.
+    HangParams p;
+    p.n = 8;
+    p.total_mass = 0.064f; // 1 g per particle
+    p.stiffness = 2000.0f;
+    const SceneBuild b = build_hang_scene(p);
+    const app::DerivedMaterial d = app::derive_material(b.cloth);
+    EXPECT_NEAR(d.node_mass_g_mean, 1.0, 1e-5);
+    EXPECT_NEAR(d.node_mass_g_min, 1.0, 1e-5); // pinned corners count with their free mass
+    EXPECT_NEAR(d.node_mass_g_max, 1.0, 1e-5);
+    EXPECT_EQ(d.stiffness[0], 2000.0f);
+    EXPECT_EQ(d.spring_max[0], 2000.0f);
+    EXPECT_EQ(d.spring_min[0], 2000.0f);
+    EXPECT_EQ(d.spring_max[2], 200.0f); // bend 0.1 k
+    EXPECT_EQ(d.spring_max[3], 0.0f);   // no seams on a grid
+    EXPECT_EQ(d.spring_min[3], 0.0f);
+    SceneSpec spec = parse_scene(grid_scene(R"("wool")"), "t");
+    const nlohmann::ordered_json j = app::material_report(spec, b.cloth);
+    EXPECT_EQ(j["model"], "fabric");
+    EXPECT_EQ(j["fabric"]["name"], "wool");
+    EXPECT_NEAR(j["fabric"]["density_gsm"].get<double>(), double(find_fabric("wool")->density) * 1000.0, 1e-3); // g/m^2
+    EXPECT_NEAR(j["derived"]["node_mass_g"].get<double>(), 1.0, 1e-5);
+    EXPECT_EQ(j["derived"]["spring_k_max"]["structural"].get<float>(), 2000.0f);
 }

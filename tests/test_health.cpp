@@ -153,6 +153,7 @@ INSTANTIATE_TEST_SUITE_P(Scenes, BuiltInScene,
 TEST(StrainLimitHealth, TightLimitOnSoftClothHoldsWithoutEnergy) {
     SceneSpec spec = load_scene("hang");
     spec.grid.n = 32;
+    spec.model = MaterialModel::springs; // the seeds' spring model (the CLI's --material springs)
     spec.stiffness = 100.0f;
     spec.physics.strain_limit.ratio = 0.01f;
     BuiltScene b = build_scene(spec);

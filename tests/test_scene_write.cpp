@@ -172,13 +172,24 @@ TEST(SceneWrite, EveryScenesRoundTripsToTheSameSpecAndCloth) {
 }
 
 TEST(SceneWrite, EveryFieldIsWrittenExplicitly) {
-    const std::string text = scene_to_json(load_scene("hang"));
+    SceneSpec springs = load_scene("hang");
+    springs.model = MaterialModel::springs;
+    const std::string text = scene_to_json(springs);
     for (const char* field : {"\"scene\"", "\"description\"", "\"type\": \"grid\"", "\"n\": 100", "\"size\"", "\"mass\"",
-                              "\"plane\"", "\"centre\"", "\"pins\": \"corners\"", "\"stiffness\": 1000", "\"shear_ratio\"",
+                              "\"plane\"", "\"centre\"", "\"pins\": \"corners\"", "\"pin_radius\": 0.01",
+                              "\"model\": \"springs\"", "\"stiffness\": 1000", "\"shear_ratio\"",
                               "\"bend_ratio\"", "\"damping_ratio\"", "\"seam_stiffness\"", "\"gravity\": [0, -9.81, 0]",
                               "\"drag\": 0.2", "\"integrator\": \"euler\"", "\"wind\"", "\"aero\"", "\"strain_limit\"",
                               "\"colliders\"", "\"body\": false"})
         EXPECT_TRUE(has(text, field)) << field << "\n" << text;
+    // The built-in hang is silk: the fabric's every figure in file units, no spring fields, no cloth mass.
+    const std::string fabric = scene_to_json(load_scene("hang"));
+    for (const char* field : {"\"model\": \"fabric\"", "\"fabric\": \"silk\"", "\"density_gsm\": 60,", "\"stretch_u\"",
+                              "\"stretch_v\"", "\"shear\"", "\"bend_u_uNm\"", "\"bend_v_uNm\"", "\"damping\"",
+                              "\"seam_stiffness\""})
+        EXPECT_TRUE(has(fabric, field)) << field << "\n" << fabric;
+    for (const char* field : {"\"mass\"", "\"stiffness\":", "\"shear_ratio\"", "\"damping_ratio\""})
+        EXPECT_FALSE(has(fabric, field)) << field << "\n" << fabric;
     EXPECT_FALSE(has(text, "\"state\""));
     EXPECT_FALSE(has(text, "\"dt\"")) << "absent dt stays absent (the default bound)";
     SceneSpec with_dt = load_scene("hang");
@@ -335,8 +346,9 @@ TEST(SceneWrite, SaveIsAtomicAndFailuresNameThePath) {
     const std::string never = (dir / "never.json").string();
     EXPECT_THROW(save_scene(never, rotated), InvalidInput);
     EXPECT_FALSE(std::filesystem::exists(never));
-    // A spec that would not load back (the node-mass rule) is refused too.
+    // A spec that would not load back (the spring model's node-mass rule) is refused too.
     SceneSpec heavy = spec;
+    heavy.model = MaterialModel::springs;
     heavy.grid.total_mass = 1000.0f;
     try {
         save_scene(never, heavy);

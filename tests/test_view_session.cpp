@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "drape/errors.hpp"
+#include "drape/scene_write.hpp"
 #include "drape/stability.hpp"
 #include "view_session.hpp"
 
@@ -577,6 +578,11 @@ TEST(ViewSessionFabric, PresetAndFiguresRebuildContinuingTheMotion) {
     EXPECT_EQ(s.fabric().fabric.bend_u, find_fabric("denim")->bend_u);
     EXPECT_EQ(s.current_spec().model, MaterialModel::fabric);
     EXPECT_EQ(s.current_spec().fabric.name, "denim");
+    // what File > Save scene writes loads back (a grid has no seams: the scene's seam stiffness is kept)
+    EXPECT_EQ(s.current_spec().seam_stiffness, 1000.0f);
+    const SceneSpec back = parse_scene(scene_to_json(s.current_spec()), "saved.json");
+    EXPECT_EQ(back.fabric.name, "denim");
+    EXPECT_EQ(back.model, MaterialModel::fabric);
     EXPECT_TRUE(stable(s));
     // one figure changed: a custom fabric
     Fabric f = s.fabric().fabric;

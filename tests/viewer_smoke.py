@@ -96,10 +96,12 @@ def drive_input(drape):
     def xdo(*args):
         subprocess.run(["xdotool"] + [str(a) for a in args], check=True, timeout=30)
 
-    # Panel layout at the default 1280 x 800 window (Run mode and Fabric open): the rows' centres, window pixels.
-    structural_k = (100, 262)
-    shear_k = (100, 285)
-    proc = subprocess.Popen([drape, "view", "--substeps", "900", "--stats-json", "--no-vsync"],
+    # Panel layout at the default 1280 x 800 window (Run mode and Fabric open, the spring model: the Fabric panel's
+    # "model" row, then node mass, then the stiffness rows): the rows' centres, window pixels.
+    structural_k = (100, 285)
+    shear_k = (100, 308)
+    proc = subprocess.Popen([drape, "view", "--material", "springs", "--substeps", "900", "--stats-json",
+                             "--no-vsync"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         wid = subprocess.run(["xdotool", "search", "--sync", "--onlyvisible", "--name", "drape - cloth viewer"],

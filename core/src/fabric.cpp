@@ -24,6 +24,20 @@ constexpr double kes_shear(double g) { return g * 9.80665e-3 / 0.01 * 180.0 / 3.
 /// Bending rigidity B, gf cm^2/cm -> N*m (per unit width).
 constexpr double kes_bend(double b) { return b * 9.80665e-5; }
 
+// FAST (SiroFAST, CSIRO) units to SI: bending rigidity is already uN*m and shear rigidity G already N/m (per radian).
+/// Secant tensile stiffness per unit width, N/m, from E100 (% extension at 100 gf/cm = 98.07 N/m).
+constexpr double fast_tensile(double e100_percent) { return 100.0 * 9.80665e-3 / 0.01 / (e100_percent / 100.0); }
+
+// Wang, O'Brien and Ramamoorthi 2011 (ARCSim data files): the zero-strain row (k0, k1, k2, k3) of a fabric's
+// "stretching" table, read as ARCSim does (stiffness = 2 x the file's figures; energy per area
+// 1/2 (k0 G00^2 + 2 k1 G00 G11 + k2 G11^2 + k3 G01^2) in the Green strain G, docs/fabric.md "Units").
+/// Tensile stiffness along u with the sides free, N/m: k0 - k1^2 / k2.
+constexpr double wang_tensile_u(double d0, double d1, double d2) { return 2.0 * (d0 - d1 * d1 / d2); }
+/// Tensile stiffness along v with the sides free, N/m: k2 - k1^2 / k0.
+constexpr double wang_tensile_v(double d0, double d1, double d2) { return 2.0 * (d2 - d1 * d1 / d0); }
+/// Shear stiffness, N/m per radian of shear angle: G01 is half the angle, so G = k3 / 4.
+constexpr double wang_shear(double d3) { return 2.0 * d3 / 4.0; }
+
 /// Rayleigh beta, s, that keeps the stiffest mode's damping ratio at `zeta` at spacing h: the explicit bound of a
 /// grid is dt ~ h / (2 c) with c = sqrt(stretch / density) the membrane wave speed, and the highest mode (w = 2/dt)
 /// gets damping ratio beta w / 2 = beta / dt. zeta = 0.03 at h = 1 cm (the finest default scene, hang N = 100 on 1 m)
@@ -52,7 +66,7 @@ FabricPreset make(const char* name, double gsm, double stretch_u, double stretch
 std::vector<FabricPreset> build_presets() {
     std::vector<FabricPreset> out;
     // Every figure below is listed, converted and sourced in docs/fabric.md "Presets"; "estimate" there marks a
-    // figure that is not a measurement of that fabric.
+    // figure that is not a measurement of that fabric. denim: KES-F; wool: FAST; jersey: Wang et al. 2011.
     out.push_back(make("silk", 60.0, kes_tensile(8.0), kes_tensile(10.0), kes_shear(0.35), kes_bend(0.025),
                        kes_bend(0.02), "silk, crepe de chine / habotai class, 60 g/m^2",
                        "estimate within the KES-F ranges of silk filament weaves (Matsudaira, Kanazawa Univ. "
@@ -61,17 +75,23 @@ std::vector<FabricPreset> build_presets() {
                        kes_bend(0.06), "cotton shirting, plain weave (poplin), 120 g/m^2",
                        "estimate: typical KES-F values of cotton shirtings (EMT 3-8 %, G 0.5-1.5 gf/cm/deg, "
                        "B 0.05-0.12 gf cm^2/cm)"));
-    out.push_back(make("jersey", 160.0, kes_tensile(30.0), kes_tensile(60.0), kes_shear(0.3), kes_bend(0.035),
-                       kes_bend(0.02), "cotton single jersey knit, 160 g/m^2 (u = wales, v = courses)",
-                       "estimate: knits stretch 5-10x more than wovens under the same KES-F load; bending "
-                       "and shear from the low end of the woven ranges"));
+    // Wang et al. 2011 "gray-interlock": stretching row 0 = (16.593832, -14.695990, 34.477123, 36.860302); bending
+    // at the smallest curvature: 14.267624e-6 (hinges along v, row 2) and 23.191698e-6 (hinges along u, row 0).
+    out.push_back(make("jersey", 187.0, wang_tensile_u(16.593832, -14.695990, 34.477123),
+                       wang_tensile_v(16.593832, -14.695990, 34.477123), wang_shear(36.860302), 14.267624e-6,
+                       23.191698e-6, "cotton/polyester interlock (double jersey) knit, T-shirt fabric, 187 g/m^2",
+                       "measured: Wang, O'Brien and Ramamoorthi, 'Data-driven elastic models for cloth', ACM TOG 30(4) "
+                       "2011, fabric 'gray-interlock' (60% cotton 40% polyester, T-shirt) as distributed with ARCSim "
+                       "(materials/gray-interlock.json): density 0.187 kg/m^2, zero-strain stretching row, bending "
+                       "at the smallest curvature taken as N*m (conversion factor uncertain, docs/fabric.md)"));
     out.push_back(make("linen", 180.0, kes_tensile(2.5), kes_tensile(3.5), kes_shear(2.5), kes_bend(0.25),
                        kes_bend(0.18), "linen, plain weave, 180 g/m^2",
                        "estimate: linen is the stiffest of the common apparel wovens in KES-F bending and shear"));
-    out.push_back(make("wool", 250.0, kes_tensile(4.0), kes_tensile(5.0), kes_shear(0.6), kes_bend(0.10),
-                       kes_bend(0.08), "worsted wool suiting, twill, 250 g/m^2",
-                       "estimate: KES-F values of men's worsted suitings (EMT ~4 %, G ~0.6 gf/cm/deg, "
-                       "B ~0.1 gf cm^2/cm; Kawabata and Niwa's suiting data)"));
+    out.push_back(make("wool", 168.0, fast_tensile(4.60), fast_tensile(5.87), 26.17, 5.56e-6, 5.02e-6,
+                       "100% wool, plain weave, 168 g/m^2",
+                       "measured with SiroFAST, but an unreviewed student lab report ('Fabric Assurance by Simple "
+                       "Testing (F.A.S.T)', posted on bartleby.com and majortests.com): W 168 g/m^2, B 5.56 / 5.02 "
+                       "uN*m (warp / weft), E100 4.60 / 5.87 %, G 26.17 N/m (EB5 4.7 %)"));
     out.push_back(make("denim", 270.0, kes_tensile(5.515), kes_tensile(5.515), kes_shear(2.180), kes_bend(0.172),
                        kes_bend(0.172), "lightweight denim, 3/1 twill, 270 g/m^2 (8 oz/yd^2)",
                        "KES-F of denim fabric A in Journal of Textiles 2016, article 4614168 ('Regenerated "

@@ -165,18 +165,27 @@ std::string cloth_json(const SceneSpec& s, const std::filesystem::path& relative
     return f.object();
 }
 
-/// The material: the fabric's every figure in file units (exact: a float times 1000 or 1e6 is exact in a double,
-/// and the division on reading gives the float back), naming its preset when it is one unchanged; or the springs.
+/// A fabric figure in file units (SI x scale): the shortest float text when reading it back (as parse_scene does:
+/// double / scale, rounded to float) gives the same bits, else the exact double (a float times 1000 or 1e6 is exact
+/// in a double, and the division gives the float back).
+std::string scaled(float si, double scale) {
+    const std::string pretty = num(static_cast<float>(double(si) * scale));
+    if (static_cast<float>(std::strtod(pretty.c_str(), nullptr) / scale) == si) return pretty;
+    return num(double(si) * scale);
+}
+
+/// The material: the fabric's every figure in file units, naming its preset when it is one unchanged; or the
+/// springs.
 std::string material_json(const SceneSpec& s) {
     Fields mat;
     if (s.model == MaterialModel::fabric) {
         const Fabric& f = s.fabric;
         mat.add("model", str("fabric"));
         if (find_fabric(f.name)) mat.add("fabric", str(f.name));
-        mat.add("density_gsm", num(double(f.density) * fabric_gsm_per_kg_m2)).add("stretch_u", num(f.stretch_u))
+        mat.add("density_gsm", scaled(f.density, fabric_gsm_per_kg_m2)).add("stretch_u", num(f.stretch_u))
             .add("stretch_v", num(f.stretch_v)).add("shear", num(f.shear))
-            .add("bend_u_uNm", num(double(f.bend_u) * fabric_uNm_per_Nm))
-            .add("bend_v_uNm", num(double(f.bend_v) * fabric_uNm_per_Nm)).add("damping", num(f.damping));
+            .add("bend_u_uNm", scaled(f.bend_u, fabric_uNm_per_Nm))
+            .add("bend_v_uNm", scaled(f.bend_v, fabric_uNm_per_Nm)).add("damping", num(f.damping));
     } else {
         mat.add("model", str("springs")).add("stiffness", num(s.stiffness)).add("shear_ratio", num(s.shear_ratio))
             .add("bend_ratio", num(s.bend_ratio)).add("damping_ratio", num(s.damping_ratio));
