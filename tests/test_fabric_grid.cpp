@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "drape/errors.hpp"
+#include "drape/health_monitor.hpp"
 #include "drape/scene_hang.hpp"
 #include "drape/simulation.hpp"
 #include "drape/stability.hpp"
@@ -194,6 +195,51 @@ TEST(FabricGrid, DefaultDtIsStableAndTheBoundIsNotLoose) {
     SceneBuild sd = build_hang_scene(damped);
     EXPECT_TRUE(run(default_dt(sd.cloth, 0.0f), 2000, damped.fabric.damping));
     EXPECT_LT(default_dt(sd.cloth, 0.0f), 0.9 * b.dt_max) << "Rayleigh damping lowers the bound";
+}
+
+TEST(FabricGrid, GridKernelOnlyForTheGridsOwnBending) {
+    SceneBuild s = build_hang_scene(fabric_params(6));
+    SimulationParams p;
+    p.dt = static_cast<float>(default_dt(s.cloth, p.air_drag));
+    EXPECT_EQ(Simulation(s.cloth, s.initial, p).kernel(), KernelPath::grid);
+    // Other elements on the same grid (here: the rows only): the grid kernel's closed form no longer applies.
+    std::vector<BendElement> rows = s.cloth.bending.elements;
+    rows.resize(4 * 6);
+    set_bending(s.cloth, rows, 0.0f);
+    EXPECT_FALSE(s.cloth.bending.grid.has_value());
+    EXPECT_EQ(Simulation(s.cloth, s.initial, p).kernel(), KernelPath::csr);
+    p.kernel = KernelPath::grid;
+    EXPECT_THROW(Simulation(s.cloth, s.initial, p), InvalidInput);
+}
+
+TEST(FabricGrid, HealthMonitorCountsTheBendingEnergy) {
+    // A cloth started bent into a cylinder, at rest, without gravity: at the first check the energy bound is
+    // energy_factor x (elastic energy at the start + the floor), and the elastic energy includes the bending energy.
+    auto bound = [](bool bending) {
+        HangParams hp = fabric_params(24);
+        hp.fabric.bend_u = hp.fabric.bend_v = 1e-3f; // a bending energy far above the floor
+        hp.pins = GridPins::none;
+        SceneBuild s = build_hang_scene(hp);
+        const double R = 0.3;
+        for (std::size_t i = 0; i < s.initial.x.size(); ++i) {
+            const double u = s.initial.x[i];
+            s.initial.x[i] = float(R * std::sin(u / R));
+            s.initial.y[i] = float(R * (1.0 - std::cos(u / R)));
+        }
+        const double e_bend =
+            bending_energy(s.cloth.bending.elements, s.initial.x, s.initial.y, s.initial.z);
+        if (!bending) set_bending(s.cloth, {}, 0.0f);
+        SimulationParams p;
+        p.gravity = {0.0f, 0.0f, 0.0f};
+        p.dt = static_cast<float>(default_dt(s.cloth, p.air_drag));
+        Simulation sim(std::move(s.cloth), s.initial, p);
+        sim.step(HealthMonitor::check_every);
+        return std::pair{sim.health().monitor.energy_bound, e_bend};
+    };
+    const auto [with, e_bend] = bound(true);
+    const auto [without, unused] = bound(false);
+    ASSERT_GT(e_bend, 1e-4);
+    EXPECT_NEAR(with - without, HealthMonitor::energy_factor * e_bend, 1e-6 * with);
 }
 
 TEST(FabricGrid, HangsOneSecondHealthyAtN64) {

@@ -163,8 +163,8 @@ SceneBuild build_hang_scene(const HangParams& p) {
             for (std::size_t s2 = 0; s2 < GridStencil::slot_count; ++s2) {
                 const int ni = static_cast<int>(i) + slots[s2].di, nj = static_cast<int>(j) + slots[s2].dj;
                 if (ni < 0 || nj < 0 || ni >= N || nj >= N) continue;
+                if (fabric && slots[s2].kind == SpringKind::bend) continue; // no bend springs: bending replaces them
                 bits |= 1u << s2;
-                if (fabric && slots[s2].kind == SpringKind::bend) continue; // neighbour bit only (bending reads it)
                 // Fabric: assembled per cell, a structural edge on the boundary (one adjacent cell) gets half.
                 const bool half = fabric && slots[s2].kind == SpringKind::structural &&
                                   (slots[s2].dj == 0 ? edge_row : edge_column);

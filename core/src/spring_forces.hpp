@@ -9,6 +9,8 @@
 // ~27 SIMD operations per spring end; a zero-length spring gives zero force (l^2 clamped, d = 0).
 #pragma once
 
+#include <utility>
+
 #include "kernel_context.hpp"
 #include "drape/simulation.hpp"
 
@@ -37,7 +39,15 @@ DRAPE_INLINE fbatch spring_coefficient(const SelfBatch& s, fbatch xj, fbatch yj,
     return simd::fma(kd * rel, inv * inv, hooke);
 }
 
-/// Regular-grid stencil: neighbours at fixed offsets, contiguous unaligned loads, a per-particle slot mask.
+/// The grid stencil's slots (scene_hang.cpp builds them in this order: ascending offset; "up" is row j - 1).
+namespace grid_slot {
+inline constexpr std::size_t up2 = 0, up_left = 1, up = 2, up_right = 3, left2 = 4, left = 5, right = 6, right2 = 7,
+                             down_left = 8, down = 9, down_right = 10, down2 = 11;
+}
+
+/// Regular-grid stencil: neighbours at fixed offsets, contiguous unaligned loads, a per-particle slot mask (and the
+/// half-stiffness bits of boundary structural edges, Edge::scale 1/2, set only in the fabric model: a fabric grid
+/// whose bending was removed runs here).
 struct GridSprings {
     template <Integrator I>
     DRAPE_INLINE static Vec3b accumulate(const StepContext& c, std::size_t p, const SelfBatch& s) noexcept {
@@ -52,6 +62,9 @@ struct GridSprings {
                                                 simd::loadu(c.u + q), simd::loadu(c.v + q), simd::loadu(c.w + q),
                                                 fbatch(c.grid_k[slot]), fbatch(c.grid_krest[slot]),
                                                 fbatch(c.grid_kd[slot]), d);
+            if (slot == grid_slot::up || slot == grid_slot::left || slot == grid_slot::right || slot == grid_slot::down)
+                coef = coef * simd::select(simd::test_bits(mask, 1u << (GridStencil::half_bit + slot)), fbatch(0.5f),
+                                           fbatch(1.0f));
             coef = simd::select(simd::test_bits(mask, 1u << slot), coef, zero);
             f.x = simd::fma(coef, d.x, f.x);
             f.y = simd::fma(coef, d.y, f.y);
@@ -132,93 +145,90 @@ struct CsrBending {
 struct CsrFabric {
     template <Integrator I>
     DRAPE_INLINE static Vec3b accumulate(const StepContext& c, std::size_t p, const SelfBatch& s) noexcept {
-        Vec3b f = CsrSprings::accumulate<I>(c, p, s);
-        CsrBending::accumulate<I>(c, p, s, f);
-        return f;
+        const Vec3b f = CsrSprings::accumulate<I>(c, p, s);
+        const fbatch zero(0.0f);
+        Vec3b fb{zero, zero, zero}; // its own accumulator, as GridFabric's
+        CsrBending::accumulate<I>(c, p, s, fb);
+        return {f.x + fb.x, f.y + fb.y, f.z + fb.z};
     }
 };
 
-/// The grid stencil's slots (scene_hang.cpp builds them in this order: ascending offset; "up" is row j - 1).
-namespace grid_slot {
-inline constexpr std::size_t up2 = 0, up_left = 1, up = 2, up_right = 3, left2 = 4, left = 5, right = 6, right2 = 7,
-                             down_left = 8, down = 9, down_right = 10, down2 = 11;
-}
-
-/// Regular-grid fabric (MaterialModel::fabric on a grid): the 8 membrane springs (structural with the per-particle
-/// half-stiffness bits of boundary edges, diagonals) in ascending slot order, as the CSR row sums them, then the
-/// bending stencil in closed form from the same 12 neighbour loads (the 4 bend slots carry no spring):
-///   along the row, q_{i-1} = D_-2 - 2 D_-1, q_i = D_-1 + D_+1, q_{i+1} = D_+2 - 2 D_+1 (D_k = damped_difference of
-///   neighbour k), f += w_u (2 q_i - q_{i-1} - q_{i+1}) over the elements that exist (mask bits), w_u halved on a
-///   boundary row; the same along the column; each existing cell's cross difference q_c with the particle's
-///   coefficient s_c = +-1 gives f -= w_t s_c q_c.
-/// This is f_i = -sum_j Q_ij D_j summed in another order than the CSR path: equal within float rounding, not bitwise.
+/// Regular-grid fabric (MaterialModel::fabric on a grid), one pass over the 12 slots in ascending order, each
+/// neighbour loaded once:
+///   * the 8 membrane springs (structural with the per-particle half-stiffness bits of boundary edges, diagonals)
+///     into f, as GridSprings (the 4 bend slots carry no spring);
+///   * bending into fb: fb += a_s D_s, D_s = damped_difference of neighbour s and a_s = -Q_ij, its entry of Q's row,
+///     from the mask bits (which elements exist, boundary halves) and the three weights (GridBending):
+///       row:    a(-2) = -w_u [elem at i-1],  a(-1) = 2 w_u ([elem at i] + [elem at i-1]) + w_t ([cell up-left] +
+///               [cell down-left]),  mirrored for +1, +2 (w_u halved on a boundary row);
+///       column: the same with w_v, up / down;  diagonals: a = -w_t [its cell];
+///   * f + fb.
+/// Every a_s is one float rounding of an exact sum (a weight times 1, 2 or 4, plus w_t times 0, 1 or 2), the value
+/// Q's assembled row holds; the CSR path (CsrFabric) sums springs, then Q's row into its own accumulator, both by
+/// ascending neighbour (= slot order), then adds the two: the grid and CSR fabric kernels agree bit for bit (tested).
 struct GridFabric {
+    template <std::size_t S>
+    DRAPE_INLINE static fbatch bend_coefficient(simd::ubatch mask, fbatch wu, fbatch wv, fbatch wt) noexcept {
+        using namespace grid_slot;
+        const fbatch one(1.0f), zero(0.0f), two(2.0f);
+        auto has = [&](std::uint32_t bit) { return simd::select(simd::test_bits(mask, 1u << bit), one, zero); };
+        constexpr std::uint32_t U = GridStencil::bend_u_bit, V = GridStencil::bend_v_bit;
+        if constexpr (S == up2) return -(has(V) * wv);
+        else if constexpr (S == down2) return -(has(V + 2) * wv);
+        else if constexpr (S == left2) return -(has(U) * wu);
+        else if constexpr (S == right2) return -(has(U + 2) * wu);
+        else if constexpr (S == up) return (two * (has(V + 1) + has(V))) * wv + (has(up_left) + has(up_right)) * wt;
+        else if constexpr (S == down) return (two * (has(V + 1) + has(V + 2))) * wv + (has(down_left) + has(down_right)) * wt;
+        else if constexpr (S == left) return (two * (has(U + 1) + has(U))) * wu + (has(up_left) + has(down_left)) * wt;
+        else if constexpr (S == right) return (two * (has(U + 1) + has(U + 2))) * wu + (has(up_right) + has(down_right)) * wt;
+        else return -(has(S) * wt); // a diagonal: its cell's twist element
+    }
+
+    template <Integrator I, std::size_t S>
+    DRAPE_INLINE static void slot(const StepContext& c, std::size_t p, const SelfBatch& s, simd::ubatch mask,
+                                  fbatch wu, fbatch wv, fbatch wt, Vec3b& f, Vec3b& fb) noexcept {
+        using namespace grid_slot;
+        const fbatch zero(0.0f), one(1.0f), half(0.5f);
+        const std::ptrdiff_t q = static_cast<std::ptrdiff_t>(p) + c.grid_offset[S];
+        const fbatch xj = simd::loadu(c.x + q), yj = simd::loadu(c.y + q), zj = simd::loadu(c.z + q);
+        const fbatch uj = simd::loadu(c.u + q), vj = simd::loadu(c.v + q), wj = simd::loadu(c.w + q);
+        if constexpr (S != up2 && S != left2 && S != right2 && S != down2) {
+            Vec3b d;
+            fbatch coef = spring_coefficient<I>(s, xj, yj, zj, uj, vj, wj, fbatch(c.grid_k[S]), fbatch(c.grid_krest[S]),
+                                                fbatch(c.grid_kd[S]), d);
+            // Half stiffness (a boundary edge): the coefficient is linear in k, k l0 and kd, and halving is exact in
+            // float, so halving it gives the bits of the CSR path's halved constants.
+            if constexpr (S == up || S == left || S == right || S == down)
+                coef = coef * simd::select(simd::test_bits(mask, 1u << (GridStencil::half_bit + S)), half, one);
+            coef = simd::select(simd::test_bits(mask, 1u << S), coef, zero);
+            f.x = simd::fma(coef, d.x, f.x);
+            f.y = simd::fma(coef, d.y, f.y);
+            f.z = simd::fma(coef, d.z, f.z);
+        }
+        const fbatch a = bend_coefficient<S>(mask, wu, wv, wt), beta(c.bend_beta);
+        fb.x = simd::fma(a, damped_difference<I>(xj - s.x, uj - s.u, beta), fb.x);
+        fb.y = simd::fma(a, damped_difference<I>(yj - s.y, vj - s.v, beta), fb.y);
+        fb.z = simd::fma(a, damped_difference<I>(zj - s.z, wj - s.w, beta), fb.z);
+    }
+
+    template <Integrator I, std::size_t... S>
+    DRAPE_INLINE static Vec3b slots(const StepContext& c, std::size_t p, const SelfBatch& s,
+                                    std::index_sequence<S...>) noexcept {
+        const simd::ubatch mask = simd::load(c.grid_mask + p);
+        const fbatch zero(0.0f), one(1.0f), half(0.5f);
+        const fbatch wu = simd::select(simd::test_bits(mask, 1u << GridStencil::edge_row_bit), half, one) *
+                          fbatch(c.grid_bend_u);
+        const fbatch wv = simd::select(simd::test_bits(mask, 1u << GridStencil::edge_column_bit), half, one) *
+                          fbatch(c.grid_bend_v);
+        const fbatch wt(c.grid_twist);
+        Vec3b f{zero, zero, zero}, fb{zero, zero, zero};
+        (slot<I, S>(c, p, s, mask, wu, wv, wt, f, fb), ...);
+        return {f.x + fb.x, f.y + fb.y, f.z + fb.z};
+    }
+
     template <Integrator I>
     DRAPE_INLINE static Vec3b accumulate(const StepContext& c, std::size_t p, const SelfBatch& s) noexcept {
-        const simd::ubatch mask = simd::load(c.grid_mask + p);
-        const fbatch zero(0.0f), one(1.0f), half(0.5f), two(2.0f);
-        const fbatch beta(c.bend_beta);
-        Vec3b f{zero, zero, zero};
-        Vec3b D[GridStencil::slot_count];
-#pragma GCC unroll 12
-        for (std::size_t slot = 0; slot < GridStencil::slot_count; ++slot) {
-            const std::ptrdiff_t q = static_cast<std::ptrdiff_t>(p) + c.grid_offset[slot];
-            const fbatch xj = simd::loadu(c.x + q), yj = simd::loadu(c.y + q), zj = simd::loadu(c.z + q);
-            const fbatch uj = simd::loadu(c.u + q), vj = simd::loadu(c.v + q), wj = simd::loadu(c.w + q);
-            const bool spring = slot != grid_slot::up2 && slot != grid_slot::left2 && slot != grid_slot::right2 &&
-                                slot != grid_slot::down2;
-            const bool structural = slot == grid_slot::up || slot == grid_slot::left || slot == grid_slot::right ||
-                                    slot == grid_slot::down;
-            if (spring) {
-                Vec3b d;
-                fbatch coef = spring_coefficient<I>(s, xj, yj, zj, uj, vj, wj, fbatch(c.grid_k[slot]),
-                                                    fbatch(c.grid_krest[slot]), fbatch(c.grid_kd[slot]), d);
-                // Half stiffness (a boundary edge): the coefficient is linear in k, k l0 and kd, and halving is exact
-                // in float, so halving it gives the bits of the CSR path's halved constants.
-                if (structural)
-                    coef = coef * simd::select(simd::test_bits(mask, 1u << (GridStencil::half_bit + slot)), half, one);
-                coef = simd::select(simd::test_bits(mask, 1u << slot), coef, zero);
-                f.x = simd::fma(coef, d.x, f.x);
-                f.y = simd::fma(coef, d.y, f.y);
-                f.z = simd::fma(coef, d.z, f.z);
-            }
-            D[slot].x = damped_difference<I>(xj - s.x, uj - s.u, beta);
-            D[slot].y = damped_difference<I>(yj - s.y, vj - s.v, beta);
-            D[slot].z = damped_difference<I>(zj - s.z, wj - s.w, beta);
-        }
-        using namespace grid_slot;
-        auto exists = [&](std::uint32_t bit) { return simd::test_bits(mask, 1u << bit); };
-        // Second differences along the row (slots left2, left, right, right2) and the column (up2, up, down, down2).
-        const fbatch wu = simd::select(exists(GridStencil::edge_row_bit), half, one) * fbatch(c.grid_bend_u);
-        const fbatch wv = simd::select(exists(GridStencil::edge_column_bit), half, one) * fbatch(c.grid_bend_v);
-        const fmask ul = exists(GridStencil::bend_u_bit), u0 = exists(GridStencil::bend_u_bit + 1),
-                    ur = exists(GridStencil::bend_u_bit + 2);
-        const fmask vu = exists(GridStencil::bend_v_bit), v0 = exists(GridStencil::bend_v_bit + 1),
-                    vd = exists(GridStencil::bend_v_bit + 2);
-        const fmask c_ul = exists(up_left), c_ur = exists(up_right), c_dl = exists(down_left),
-                    c_dr = exists(down_right);
-        const fbatch wt(c.grid_twist);
-        auto component = [&](fbatch Vec3b::*m) {
-            auto at = [&](std::size_t slot) { return D[slot].*m; };
-            // Row: 2 q_i - q_{i-1} - q_{i+1}, each where it exists.
-            fbatch row = simd::select(u0, two * (at(left) + at(right)), zero);
-            row = row - simd::select(ul, simd::fnma(two, at(left), at(left2)), zero);
-            row = row - simd::select(ur, simd::fnma(two, at(right), at(right2)), zero);
-            fbatch col = simd::select(v0, two * (at(up) + at(down)), zero);
-            col = col - simd::select(vu, simd::fnma(two, at(up), at(up2)), zero);
-            col = col - simd::select(vd, simd::fnma(two, at(down), at(down2)), zero);
-            // Twist: -q(up-left cell) + q(up-right) + q(down-left) - q(down-right).
-            fbatch tw = zero;
-            tw = tw - simd::select(c_ul, at(up_left) - at(up) - at(left), zero);
-            tw = tw + simd::select(c_ur, at(up) - at(up_right) + at(right), zero);
-            tw = tw + simd::select(c_dl, at(left) - at(down_left) + at(down), zero);
-            tw = tw - simd::select(c_dr, at(down_right) - at(right) - at(down), zero);
-            return simd::fma(wu, row, simd::fma(wv, col, wt * tw));
-        };
-        f.x = f.x + component(&Vec3b::x);
-        f.y = f.y + component(&Vec3b::y);
-        f.z = f.z + component(&Vec3b::z);
-        return f;
+        return slots<I>(c, p, s, std::make_index_sequence<GridStencil::slot_count>{});
     }
 };
 

@@ -43,8 +43,7 @@ struct GridStencil {
     std::array<float, slot_count> rest{};           ///< rest length, m
     std::array<float, slot_count> scale{1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1}; ///< Edge::scale of the slot's springs
     /// Per particle:
-    ///   bit s (0..11)        slot s's spring exists (springs model; in the fabric model the four bend slots
-    ///                        +-2, +-2N carry no spring, so their bit says the neighbour exists: bending reads it);
+    ///   bit s (0..11)        slot s's spring exists (in the fabric model the four bend slots +-2, +-2N carry none);
     ///   bit half_bit + s     slot s's spring has half the slot's stiffness (Edge::scale = scale[s] / 2: a membrane
     ///                        edge on the cloth's boundary, fabric model);
     ///   bits bend_u_bit + 0..2  the second difference along the row centred at the particle's left neighbour, at the
