@@ -168,7 +168,10 @@ SceneBuild build_hang_scene(const HangParams& p) {
                 // Fabric: assembled per cell, a structural edge on the boundary (one adjacent cell) gets half.
                 const bool half = fabric && slots[s2].kind == SpringKind::structural &&
                                   (slots[s2].dj == 0 ? edge_row : edge_column);
-                if (half) bits |= 1u << (GridStencil::half_bit + s2);
+                if (half) {
+                    bits |= 1u << (GridStencil::half_bit + s2);
+                    g.half_edges = true;
+                }
                 if (g.offset[s2] > 0)
                     edges.push_back({k, static_cast<std::uint32_t>(static_cast<int>(k) + g.offset[s2]), slots[s2].kind,
                                      g.rest[s2], half ? 0.5f * g.scale[s2] : g.scale[s2]});

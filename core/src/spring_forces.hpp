@@ -45,9 +45,8 @@ inline constexpr std::size_t up2 = 0, up_left = 1, up = 2, up_right = 3, left2 =
                              down_left = 8, down = 9, down_right = 10, down2 = 11;
 }
 
-/// Regular-grid stencil: neighbours at fixed offsets, contiguous unaligned loads, a per-particle slot mask (and the
-/// half-stiffness bits of boundary structural edges, Edge::scale 1/2, set only in the fabric model: a fabric grid
-/// whose bending was removed runs here).
+/// Regular-grid stencil: neighbours at fixed offsets, contiguous unaligned loads, a per-particle slot mask. Ignores the
+/// half-stiffness bits: a grid that has them (GridStencil::half_edges, the fabric model) runs GridFabric.
 struct GridSprings {
     template <Integrator I>
     DRAPE_INLINE static Vec3b accumulate(const StepContext& c, std::size_t p, const SelfBatch& s) noexcept {
@@ -62,9 +61,6 @@ struct GridSprings {
                                                 simd::loadu(c.u + q), simd::loadu(c.v + q), simd::loadu(c.w + q),
                                                 fbatch(c.grid_k[slot]), fbatch(c.grid_krest[slot]),
                                                 fbatch(c.grid_kd[slot]), d);
-            if (slot == grid_slot::up || slot == grid_slot::left || slot == grid_slot::right || slot == grid_slot::down)
-                coef = coef * simd::select(simd::test_bits(mask, 1u << (GridStencil::half_bit + slot)), fbatch(0.5f),
-                                           fbatch(1.0f));
             coef = simd::select(simd::test_bits(mask, 1u << slot), coef, zero);
             f.x = simd::fma(coef, d.x, f.x);
             f.y = simd::fma(coef, d.y, f.y);

@@ -131,7 +131,8 @@ kernels::StepContext Simulation::make_context(std::size_t step_index) {
         }
     }
     const BendingSet& bend = cl.bending;
-    c.bending = !bend.empty();
+    // GridFabric also for a fabric grid without bending (its boundary halves); its bending weights are then 0.
+    c.bending = !bend.empty() || (kernel_ == KernelPath::grid && cl.grid && cl.grid->half_edges);
     c.bend_beta = params_.integrator == Integrator::verlet ? bend.damping * c.inv_dt : bend.damping;
     c.bend_slice_begin = bend.slice_begin.data();
     c.bend_slice_slots = bend.slice_slots.data();
@@ -166,7 +167,6 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
     const Integrator integ = params_.integrator;
     const bool wind = params_.wind.enabled;
     const bool seams = !cloth_.seams.empty(), aero = params_.aero.enabled, extra = extra_forces();
-    const bool bending = !cloth_.bending.empty();
     if (grabbed_ != SIZE_MAX && grab_target_ != grab_applied_) {
         // The user moved the grab: its speed enters the monitor's speed bound, and the work it did its energy
         // balance (restarted below, after the grabbed particle has moved).
@@ -183,6 +183,7 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
     }
     for (std::size_t n = 0; n < count; ++n) {
         const kernels::StepContext c = make_context(steps_done_);
+        const bool bending = c.bending;
         if (aero) aero_forces_stage<Parallel>();
         if (seams) seam_forces_stage<Parallel>();
         if (params_.fused) {

@@ -53,6 +53,9 @@ struct GridStencil {
     ///   bit edge_column_bit  its column is the first or last (its column elements have half weight).
     /// A twist element (cell cross difference) exists exactly where the cell's diagonal (shear-slot) spring does.
     AlignedArray<std::uint32_t> mask;
+    /// Some mask word has a half bit (the fabric model): the grid kernel must be GridFabric, which reads them, even
+    /// when the cloth has no bending.
+    bool half_edges = false;
     static constexpr std::uint32_t half_bit = 12, bend_u_bit = 24, bend_v_bit = 27, edge_row_bit = 30,
                                    edge_column_bit = 31;
 };
