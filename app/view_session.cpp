@@ -217,8 +217,8 @@ ViewSession::Built ViewSession::build(Snapshot t, const KeepState* keep_state, b
     const bool fabric = t.fabric.model == MaterialModel::fabric;
     spec.model = t.fabric.model;
     spec.fabric = t.fabric.fabric;
-    spec.seam_stiffness = t.fabric.stiffness[static_cast<std::size_t>(SpringKind::seam)];
     if (!fabric) {
+        spec.seam_stiffness = t.fabric.stiffness[static_cast<std::size_t>(SpringKind::seam)];
         if (spec.cloth == ClothType::grid)
             spec.grid.total_mass = t.fabric.node_mass_g * 1e-3f * float(count);
         else
@@ -231,10 +231,12 @@ ViewSession::Built ViewSession::build(Snapshot t, const KeepState* keep_state, b
     if (fabric) {
         // The builder derived every per-element value from the fabric and the mesh: shown, not imposed.
         const DerivedMaterial d = derive_material(cloth);
-        const float seam = t.fabric.stiffness[static_cast<std::size_t>(SpringKind::seam)]; // the user's, kept
+        // The seams too (the fabric's stiffness across one cell); a cloth without seams keeps the spring model's
+        // seam value for a switch back to it.
+        const float seam = t.fabric.stiffness[static_cast<std::size_t>(SpringKind::seam)];
         t.fabric.node_mass_g = static_cast<float>(d.node_mass_g_mean);
         t.fabric.stiffness = d.stiffness;
-        t.fabric.stiffness[static_cast<std::size_t>(SpringKind::seam)] = seam;
+        if (cloth.seams.empty()) t.fabric.stiffness[static_cast<std::size_t>(SpringKind::seam)] = seam;
         t.fabric.derived_damping = d.damping;
     } else {
         // The exact node mass now that the count is known (the T-shirt's estimate may differ).
@@ -770,7 +772,7 @@ bool ViewSession::apply_physics(const Candidate& next, const std::string& what, 
 }
 
 void ViewSession::set_stiffness(SpringKind kind, float k) {
-    if (fabric_.model == MaterialModel::fabric && kind != SpringKind::seam) {
+    if (fabric_.model == MaterialModel::fabric) {
         post(MessageLevel::warning, std::string("refused: the fabric model derives the ") + spring_kind_name(kind) +
                                         " springs from the fabric; edit its figures, or switch the model to springs");
         return;

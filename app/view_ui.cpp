@@ -203,12 +203,8 @@ void Viewer::ui_fabric() {
                 "and per-spring stiffness set directly.");
     if (s.fabric().model == MaterialModel::fabric) {
         ui_fabric_material();
-        if (s.has_seams()) {
-            float v = 0.0f;
-            if (edit_float("seam k", s.fabric().stiffness[3], view_min_stiffness, view_max_stiffness, "%.0f N/m",
-                           log_flags, v))
-                s.set_stiffness(SpringKind::seam, v);
-        }
+        if (s.has_seams()) // derived from the fabric like the membrane springs (docs/fabric.md "Triangle meshes")
+            ImGui::TextDisabled("  seam k %.4g N/m", double(s.fabric().stiffness[3]));
     } else {
         ui_spring_material();
     }

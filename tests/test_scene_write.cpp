@@ -259,7 +259,8 @@ TEST(SceneWrite, UserPinsAndUnpinsAreSaved) {
     sim.set_pinned(0, false);
     sim.set_pinned(5050, true);
     const SceneState st = capture_state(sim);
-    EXPECT_EQ(st.pinned, (std::vector<std::uint32_t>{99, 5050}));
+    // The 2 cm clips hold 4 particles each at N = 100 (h = 1 cm): the corner, its two neighbours and (1, 1) at 1.41 cm.
+    EXPECT_EQ(st.pinned, (std::vector<std::uint32_t>{1, 98, 99, 100, 101, 198, 199, 5050}));
     // Unpinned authored pin gets its mass back: it falls.
     SceneSpec spec = load_scene("hang");
     spec.state = st;
@@ -275,7 +276,7 @@ TEST(SceneWrite, GrabbedParticleIsSavedUnpinned) {
     sim.grab(42, {0.0f, 0.5f, 0.0f});
     sim.step(3);
     const SceneState st = capture_state(sim);
-    EXPECT_EQ(st.pinned, (std::vector<std::uint32_t>{0, 99}));
+    EXPECT_EQ(st.pinned, (std::vector<std::uint32_t>{0, 1, 98, 99, 100, 101, 198, 199})) << "the two clips";
 }
 
 TEST(SceneWrite, VerletStateContinuesToWithinRounding) {

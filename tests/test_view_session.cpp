@@ -155,7 +155,13 @@ TEST(ViewSession, SceneFilesAndBuiltInScenes) {
     EXPECT_TRUE(s.has_seams());
     EXPECT_FALSE(s.publisher().grid_path());
     EXPECT_TRUE(stable(s));
-    s.set_stiffness(SpringKind::seam, 4000.0f); // the seam slider
+    // The T-shirt's fabric derives its seams (the fabric across one cell): shown, and the slider is refused.
+    EXPECT_EQ(s.fabric().stiffness[3], s.sim().cloth().material[3].stiffness);
+    s.set_stiffness(SpringKind::seam, 4000.0f);
+    EXPECT_NE(s.message().text.find("refused"), std::string::npos) << s.message().text;
+    s.set_material_model(MaterialModel::springs);
+    s.wait();
+    s.set_stiffness(SpringKind::seam, 4000.0f); // the seam slider of the spring model
     EXPECT_EQ(s.fabric().stiffness[3], 4000.0f);
     EXPECT_TRUE(stable(s));
     s.advance();
@@ -611,7 +617,7 @@ TEST(ViewSessionFabric, PresetAndFiguresRebuildContinuingTheMotion) {
     EXPECT_EQ(s.fabric().fabric.name, "denim");
     s.undo();
     s.wait();
-    EXPECT_EQ(s.fabric().fabric.name, "silk");
+    EXPECT_EQ(s.fabric().fabric.name, "wool"); // the hang scene's
 }
 
 TEST(ViewSessionFabric, SwitchingModels) {

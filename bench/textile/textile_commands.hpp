@@ -1,0 +1,27 @@
+// drape_textile's subcommands, one file each (bench/textile/cmd_*.cpp).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace drape::textile {
+
+struct Options {
+    int threads = 1;
+    bool quick = false; ///< coarse spacings only
+    bool fine = false;  ///< add the finest (slow) resolution
+    bool static_only = false; ///< hang: settle from flat without the swing
+    std::vector<std::uint32_t> sizes; ///< hang: grid sizes (default 32, 64, 128)
+    std::vector<double> spacings;     ///< cusick: grid spacings, m (default 0.02, 0.01, 0.005)
+    std::string png_dir;
+    std::vector<std::string> fabrics;
+};
+
+int cmd_cantilever(const Options& opt);
+int cmd_tension(const Options& opt);
+int cmd_cusick(const Options& opt);
+int cmd_hang(const Options& opt);
+int cmd_verlet(const Options& opt);
+
+} // namespace drape::textile
