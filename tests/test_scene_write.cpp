@@ -176,15 +176,15 @@ TEST(SceneWrite, EveryFieldIsWrittenExplicitly) {
     springs.model = MaterialModel::springs;
     const std::string text = scene_to_json(springs);
     for (const char* field : {"\"scene\"", "\"description\"", "\"type\": \"grid\"", "\"n\": 100", "\"size\"", "\"mass\"",
-                              "\"plane\"", "\"centre\"", "\"pins\": \"corners\"", "\"pin_radius\": 0.01",
+                              "\"plane\"", "\"centre\"", "\"pins\": \"corners\"", "\"pin_radius\": 0.02",
                               "\"model\": \"springs\"", "\"stiffness\": 1000", "\"shear_ratio\"",
                               "\"bend_ratio\"", "\"damping_ratio\"", "\"seam_stiffness\"", "\"gravity\": [0, -9.81, 0]",
                               "\"drag\": 0.2", "\"integrator\": \"euler\"", "\"wind\"", "\"aero\"", "\"strain_limit\"",
                               "\"colliders\"", "\"body\": false"})
         EXPECT_TRUE(has(text, field)) << field << "\n" << text;
-    // The built-in hang is silk: the fabric's every figure in file units, no spring fields, no cloth mass.
+    // The built-in hang is wool: the fabric's every figure in file units, no spring fields, no cloth mass.
     const std::string fabric = scene_to_json(load_scene("hang"));
-    for (const char* field : {"\"model\": \"fabric\"", "\"fabric\": \"silk\"", "\"density_gsm\": 60,", "\"stretch_u\"",
+    for (const char* field : {"\"model\": \"fabric\"", "\"fabric\": \"wool\"", "\"density_gsm\": 168,", "\"stretch_u\"",
                               "\"stretch_v\"", "\"shear\"", "\"bend_u_uNm\"", "\"bend_v_uNm\"", "\"damping\"",
                               "\"seam_stiffness\""})
         EXPECT_TRUE(has(fabric, field)) << field << "\n" << fabric;
