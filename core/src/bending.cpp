@@ -9,6 +9,7 @@
 #include "drape/cloth.hpp"
 #include "drape/errors.hpp"
 #include "drape/simd.hpp"
+#include "sell_layout.hpp"
 
 namespace drape {
 
@@ -128,18 +129,7 @@ void set_bending(Cloth& cloth, std::vector<BendElement> elements, float damping)
     // SELL-C over the padded particle range, as SpringGraph (spring_graph.hpp).
     constexpr std::size_t C = simd::width;
     const std::size_t slices = cloth.padded_count / C;
-    b.slice_begin.assign(slices + 1, 0);
-    b.slice_slots.assign(slices, 0);
-    for (std::size_t s = 0; s < slices; ++s) {
-        std::uint32_t longest = 0;
-        for (std::size_t lane = 0; lane < C; ++lane) {
-            const std::size_t i = s * C + lane;
-            if (i < n) longest = std::max(longest, b.offsets[i + 1] - b.offsets[i]);
-        }
-        b.slice_slots[s] = longest;
-        b.slice_begin[s + 1] = b.slice_begin[s] + static_cast<std::uint32_t>(longest * C);
-    }
-    const std::size_t total = b.slice_begin[slices];
+    const std::size_t total = sell_slices(b.offsets, n, cloth.padded_count, b.slice_begin, b.slice_slots);
     b.sell_neighbour.reset(total);
     b.sell_coefficient.reset(total);
     for (std::size_t s = 0; s < slices; ++s)

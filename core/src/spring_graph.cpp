@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "drape/simd.hpp"
+#include "sell_layout.hpp"
 
 namespace drape {
 
@@ -55,18 +56,7 @@ SpringGraph build_spring_graph(std::size_t particle_count, std::size_t padded_co
     // SELL-C: slices of simd::width consecutive particles, slot-major, padded with inert self-entries.
     constexpr std::size_t C = simd::width;
     const std::size_t slices = padded_count / C;
-    g.slice_begin.assign(slices + 1, 0);
-    g.slice_slots.assign(slices, 0);
-    for (std::size_t s = 0; s < slices; ++s) {
-        std::uint32_t longest = 0;
-        for (std::size_t lane = 0; lane < C; ++lane) {
-            const std::size_t i = s * C + lane;
-            if (i < n) longest = std::max(longest, g.offsets[i + 1] - g.offsets[i]);
-        }
-        g.slice_slots[s] = longest;
-        g.slice_begin[s + 1] = g.slice_begin[s] + static_cast<std::uint32_t>(longest * C);
-    }
-    const std::size_t total = g.slice_begin[slices];
+    const std::size_t total = sell_slices(g.offsets, n, padded_count, g.slice_begin, g.slice_slots);
     g.sell_neighbour.reset(total);
     g.sell_rest.reset(total);
     g.sell_stiffness.reset(total);
