@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "drape/scene.hpp"
 #include "drape/scene_hang.hpp"
 #include "drape/stability.hpp"
 #include "harness.hpp"
@@ -21,7 +22,7 @@ HangParams hang_params(std::uint32_t n, const Fabric& fabric) {
     hp.model = MaterialModel::fabric;
     hp.fabric = fabric;
     hp.pins = GridPins::corners;
-    hp.pin_radius = 0.01f; // a 1 cm clip at each corner
+    hp.pin_radius = load_scene("hang").grid.pin_radius; // the hang scene's clips (2 cm)
     hp.plane = GridPlane::horizontal;
     return hp;
 }
@@ -85,7 +86,7 @@ double decay_time(const std::vector<double>& t, const std::vector<double>& s, do
 } // namespace
 
 int cmd_hang(const Options& opt) {
-    const std::string name = opt.fabrics.empty() ? "silk" : opt.fabrics.front();
+    const std::string name = opt.fabrics.empty() ? load_scene("hang").fabric.name : opt.fabrics.front();
     const Fabric fabric = textile_fabric(name);
     std::vector<std::uint32_t> sizes = opt.quick ? std::vector<std::uint32_t>{16, 32} : std::vector<std::uint32_t>{32, 64, 128};
     if (opt.fine) sizes.push_back(256);
