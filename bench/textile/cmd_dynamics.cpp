@@ -92,10 +92,10 @@ int cmd_hang(const Options& opt) {
     if (opt.fine) sizes.push_back(256);
     if (!opt.sizes.empty()) sizes = opt.sizes;
     const double swing_time = 6.0, settle_drag = 4.0, settle_time = 8.0, scene_drag = 0.2;
-    std::printf("Hang scene (1 m cloth, corners held by 1 cm clips), fabric %s: swing from flat for %.0f s at air drag "
+    std::printf("Hang scene (1 m cloth, corners held by %.0f mm clips), fabric %s: swing from flat for %.0f s at air drag "
                 "%.1f 1/s (the swing, the mean z of the cloth, sampled every 5 ms; decay time from a fit of the log of its "
                 "extrema's distance to the settled value), then settled at drag %.0f 1/s (max speed < 0.1 mm/s, or the lowest point still to 1 um per 20 ms (its float32 ulp is 0.12 um), at 5 checks in a row; else %.0f s)\n\n",
-                name.c_str(), swing_time, scene_drag, settle_drag, settle_time);
+                1e3 * hang_params(2, fabric).pin_radius, name.c_str(), swing_time, scene_drag, settle_drag, settle_time);
     std::printf("| N | h (mm) | dt (us) | lowest point (mm) | mid-top-edge sag (mm) | decay time (s) | extrema used "
                 "| settled (settle s) | wall s |\n");
     std::printf("|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
