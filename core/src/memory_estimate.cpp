@@ -14,12 +14,15 @@ namespace drape {
 
 namespace {
 
-/// Peak bytes per particle while cooking and running a scene (measured: peak RSS of `drape run --steps 1` against the
-/// particle count; see docs/user_guide.md "Memory"). Grids: 588 B per particle between N = 1000 and 2000, plus 5%.
-/// Triangulated cloths (tshirt, outline) cook through a Delaunay triangulation with more temporaries: 631 - 636 B per
-/// particle they get, which scene_particle_count over-counts by up to 3%; 700 keeps about 10% of margin.
-constexpr double grid_bytes_per_particle = 620.0;
-constexpr double mesh_bytes_per_particle = 700.0;
+/// Peak bytes per particle while cooking and running a scene: the slope of the peak RSS of `drape run --steps 1`
+/// between two sizes (docs/user_guide.md "Memory"), plus 5%. Measured after issue 7 (Edge::scale, bending rows):
+/// grids (hang, N = 1000 -> 1414) 676 B per particle with the seeds' springs, 881 B with a fabric (no bend springs,
+/// but Q's rows per particle, plain and SIMD-sliced); triangulated cloths (tshirt, 360 -> 720 cells per metre, 101k ->
+/// 403k particles) 758 B with springs, 911 B with a fabric (Delaunay temporaries, hinge elements).
+constexpr double grid_bytes_per_particle = 710.0;
+constexpr double grid_fabric_bytes_per_particle = 925.0;
+constexpr double mesh_bytes_per_particle = 800.0;
+constexpr double mesh_fabric_bytes_per_particle = 960.0;
 constexpr double fixed_bytes = 64.0 * 1024 * 1024;
 
 std::size_t mapped_bytes() {
@@ -32,7 +35,10 @@ std::size_t mapped_bytes() {
 } // namespace
 
 std::size_t scene_memory_bytes(const SceneSpec& spec) {
-    const double per_particle = spec.cloth == ClothType::grid ? grid_bytes_per_particle : mesh_bytes_per_particle;
+    const bool fabric = spec.model == MaterialModel::fabric;
+    const double per_particle = spec.cloth == ClothType::grid
+                                    ? (fabric ? grid_fabric_bytes_per_particle : grid_bytes_per_particle)
+                                    : (fabric ? mesh_fabric_bytes_per_particle : mesh_bytes_per_particle);
     return static_cast<std::size_t>(fixed_bytes + per_particle * double(scene_particle_count(spec)));
 }
 
