@@ -10,7 +10,7 @@
 // Options: --threads T (default 1) worker threads; --fabric NAME (repeatable) presets; --quick coarse only; --fine
 // adds the finest resolution; --png DIR (cusick) top views; --n N (repeatable, hang) grid sizes; --static (hang) the
 // settled shape only, no swing; --spacing H (repeatable, cusick) grid spacings in m; --square (cusick) the square
-// grid specimen instead of the circle.
+// grid specimen instead of the circle; --max-time S (cusick) settling time limit (default 6 s).
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
@@ -64,6 +64,13 @@ int main(int argc, char** argv) {
         else if (s == "--png" && a + 1 < argc) opt.png_dir = argv[++a];
         else if (s == "--static") opt.static_only = true;
         else if (s == "--square") opt.square = true;
+        else if (s == "--max-time" && a + 1 < argc) {
+            opt.max_time = std::atof(argv[++a]);
+            if (!(opt.max_time > 0.0 && opt.max_time <= 600.0)) {
+                std::fprintf(stderr, "drape_textile: --max-time must be in (0, 600] s\n");
+                return 2;
+            }
+        }
         else if (s == "--spacing" && a + 1 < argc) opt.spacings.push_back(std::atof(argv[++a]));
         else if (s == "--n" && a + 1 < argc) opt.sizes.push_back(static_cast<std::uint32_t>(std::atoi(argv[++a])));
         else if (s == "--fabric" && a + 1 < argc) opt.fabrics.push_back(argv[++a]);
