@@ -1,11 +1,14 @@
 // drape_textile cusick: the Cusick drape test (ISO 9073-9 / BS 5058 geometry): a 30 cm specimen centred on an 18 cm
 // disc, dropped flat from just above it and settled; drape coefficient DC = (shadow - disc) / (specimen - disc) from
-// the top-view raster of the settled triangles, folds from the radial profile of the shadow's outline.
+// the top-view raster of the settled triangles, folds from the radial profile of the shadow's outline. The specimen
+// is the standard's 30 cm circle (an outline cloth through build_scene, the triangle-mesh fabric model), or with
+// --square a 30 cm square grid cloth (the grid fabric model).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 
+#include "drape/scene.hpp"
 #include "drape/scene_hang.hpp"
 #include "drape/stability.hpp"
 #include "drape_measure.hpp"
@@ -17,7 +20,8 @@ namespace drape::textile {
 namespace {
 
 constexpr double pi = 3.14159265358979323846;
-constexpr double disc_radius = 0.09, specimen_side = 0.30;
+constexpr double disc_radius = 0.09, specimen_side = 0.30, specimen_radius = 0.15;
+constexpr double drop_height = 0.002; ///< m above the disc's collision margin
 
 struct CusickResult {
     std::uint32_t n = 0;
@@ -29,8 +33,41 @@ struct CusickResult {
     TopView view;
 };
 
-/// The square specimen (side 30 cm; a grid cloth cannot be cut to a circle), centred on the disc.
-CusickResult run_cusick(const Fabric& fabric, double spacing, double drag, double max_time) {
+/// Settles a built specimen on the disc and measures it. `sp` holds the colliders in the cloth's frame and dt.
+void settle_and_measure(Cloth cloth, const InitialState& initial, const SimulationParams& sp, double max_time,
+                        CusickResult& r) {
+    r.particles = cloth.particle_count;
+    std::vector<std::uint32_t> triangles = cloth.triangles;
+    const std::array<double, 3> origin = cloth.origin;
+    Simulation sim(std::move(cloth), initial, sp);
+    // Settled: the fastest particle slower than 1 mm/s, or the cloth's mean height still to 0.1 um per 20 ms.
+    const auto mean_height = [](const Simulation& s) {
+        double y = 0.0;
+        for (float v : s.y()) y += v;
+        return y / double(s.y().size());
+    };
+    r.settle = settle(sim, max_time, 1e-3, 0.02, 5, mean_height, 1e-7);
+    // The raster is centred on the disc axis: positions back into the world frame (x, z only; y is shading).
+    std::vector<float> x(sim.x().begin(), sim.x().end()), z(sim.z().begin(), sim.z().end());
+    for (float& v : x) v = static_cast<float>(double(v) + origin[0]);
+    for (float& v : z) v = static_cast<float>(double(v) + origin[2]);
+    r.view = rasterise_top(x, sim.y(), z, triangles, 0.22, 0.0005);
+    r.shadow = r.view.area();
+    const double disc = pi * disc_radius * disc_radius;
+    r.dc = (r.shadow - disc) / (r.specimen_area - disc);
+    const std::vector<double> prof = radial_profile(r.view, 360);
+    r.folds = fold_count(prof);
+    r.r_min = *std::min_element(prof.begin(), prof.end());
+    r.r_max = *std::max_element(prof.begin(), prof.end());
+}
+
+/// The disc and the ground, world frame (disc top at y = 0, axis x = z = 0).
+std::vector<Collider> cusick_colliders(const ColliderSurface& surface) {
+    return {make_disc({0.0f, 0.0f, 0.0f}, float(disc_radius), 0.02f, surface), make_ground(-0.5f, surface)};
+}
+
+/// The square specimen (side 30 cm, a grid cloth), centred on the disc.
+CusickResult run_cusick_square(const Fabric& fabric, double spacing, double drag, double max_time) {
     CusickResult r;
     HangParams hp;
     hp.model = MaterialModel::fabric;
@@ -40,34 +77,52 @@ CusickResult run_cusick(const Fabric& fabric, double spacing, double drag, doubl
     hp.pins = GridPins::none;
     hp.plane = GridPlane::horizontal;
     const ColliderSurface surface{0.001f, 0.6f};
-    hp.centre = {0.0f, surface.thickness + 0.002f, 0.0f};
+    hp.centre = {0.0f, surface.thickness + float(drop_height), 0.0f};
     r.n = hp.n;
     SceneBuild scene = build_hang_scene(hp);
-    r.particles = scene.cloth.particle_count;
     r.specimen_area = specimen_side * specimen_side;
     SimulationParams sp;
     sp.air_drag = static_cast<float>(drag);
     const std::array<double, 3> back{-double(hp.centre[0]), -double(hp.centre[1]), -double(hp.centre[2])};
-    sp.colliders.push_back(translated(make_disc({0.0f, 0.0f, 0.0f}, float(disc_radius), 0.02f, surface), back));
-    sp.colliders.push_back(translated(make_ground(-0.5f, surface), back));
+    for (const Collider& c : cusick_colliders(surface)) sp.colliders.push_back(translated(c, back));
     sp.dt = static_cast<float>(default_dt(scene.cloth, sp));
-    std::vector<std::uint32_t> triangles = scene.cloth.triangles;
-    Simulation sim(std::move(scene.cloth), scene.initial, sp);
-    // Settled: the fastest particle slower than 1 mm/s, or the cloth's mean height still to 0.1 um per 20 ms.
-    const auto mean_height = [](const Simulation& s) {
-        double y = 0.0;
-        for (float v : s.y()) y += v;
-        return y / double(s.y().size());
-    };
-    r.settle = settle(sim, max_time, 1e-3, 0.02, 5, mean_height, 1e-7);
-    r.view = rasterise_top(sim.x(), sim.y(), sim.z(), triangles, 0.22, 0.0005);
-    r.shadow = r.view.area();
-    const double disc = pi * disc_radius * disc_radius;
-    r.dc = (r.shadow - disc) / (r.specimen_area - disc);
-    const std::vector<double> prof = radial_profile(r.view, 360);
-    r.folds = fold_count(prof);
-    r.r_min = *std::min_element(prof.begin(), prof.end());
-    r.r_max = *std::max_element(prof.begin(), prof.end());
+    settle_and_measure(std::move(scene.cloth), scene.initial, sp, max_time, r);
+    return r;
+}
+
+/// Vertices of the circular specimen's polygon at spacing h: about one per h of perimeter (the outline is sampled
+/// at spacing <= h anyway, so more vertices would only add short edges), at least 32.
+std::uint32_t circle_vertices(double spacing) {
+    return std::max<std::uint32_t>(32, static_cast<std::uint32_t>(std::ceil(2.0 * pi * specimen_radius / spacing)));
+}
+
+/// The standard's circular specimen (radius 15 cm) as an outline cloth (a regular polygon, circle_vertices(h)
+/// vertices on the circle), horizontal, built by build_scene with the fabric model, centred on the disc. Its
+/// specimen area is the polygon's (what the cloth covers flat; within 0.3 % of pi r^2 at 20 mm).
+CusickResult run_cusick_circle(const Fabric& fabric, double spacing, double drag, double max_time) {
+    CusickResult r;
+    SceneSpec spec;
+    spec.name = "cusick";
+    spec.source = "drape_textile cusick";
+    spec.cloth = ClothType::outline;
+    spec.model = MaterialModel::fabric;
+    spec.fabric = fabric;
+    OutlineClothSpec& o = spec.outline;
+    const std::uint32_t nv = circle_vertices(spacing);
+    for (std::uint32_t k = 0; k < nv; ++k) {
+        const double a = 2.0 * pi * double(k) / double(nv);
+        o.outline.outline.push_back({specimen_radius * std::cos(a), specimen_radius * std::sin(a)});
+    }
+    o.spacing = static_cast<float>(spacing);
+    o.plane = GridPlane::horizontal;
+    const ColliderSurface surface{0.001f, 0.6f};
+    o.centre = {0.0f, surface.thickness + float(drop_height), 0.0f};
+    spec.physics.air_drag = static_cast<float>(drag);
+    spec.physics.colliders = cusick_colliders(surface);
+    BuiltScene scene = build_scene(spec); // colliders into the cloth's frame, dt = 0.9 x the stability bound
+    r.n = nv;
+    r.specimen_area = 0.5 * double(nv) * specimen_radius * specimen_radius * std::sin(2.0 * pi / double(nv));
+    settle_and_measure(std::move(scene.cloth), scene.initial, scene.params, max_time, r);
     return r;
 }
 
@@ -80,23 +135,32 @@ int cmd_cusick(const Options& opt) {
     std::vector<double> spacings = opt.quick ? std::vector<double>{0.02, 0.01} : std::vector<double>{0.02, 0.01, 0.005};
     if (opt.fine) spacings.push_back(0.0025);
     if (!opt.spacings.empty()) spacings = opt.spacings;
-    const double drag = 2.0, max_time = 6.0;
-    std::printf("Cusick drape test: square specimen %.0f cm (grid cloth), disc radius %.0f mm (collision margin 1 mm, "
-                "friction 0.6), dropped from 3 mm above, air drag %.1f 1/s, settled (max speed < 1 mm/s, or the mean height still to 0.1 um per 20 ms, at 5 checks in a row; else 6 s); shadow "
-                "rasterised at 0.5 mm; DC = (shadow - disc) / (specimen - disc)\n\n",
-                specimen_side * 100.0, disc_radius * 1e3, drag);
-    std::printf("| fabric | h (mm) | N | DC | folds | r min (mm) | r max (mm) | sim s | steps | wall s |\n");
+    const double drag = 2.0, max_time = opt.max_time > 0.0 ? opt.max_time : 6.0;
+    const bool square = opt.square;
+    if (square)
+        std::printf("Cusick drape test: square specimen %.0f cm (grid cloth, N x N particles)", specimen_side * 100.0);
+    else
+        std::printf("Cusick drape test: circular specimen, diameter %.0f cm (outline cloth: a regular polygon of "
+                    "ceil(2 pi r / h) >= 32 vertices, triangle-mesh fabric model)", specimen_radius * 200.0);
+    std::printf(", disc radius %.0f mm (collision margin 1 mm, friction 0.6), dropped from %.0f mm above, air drag "
+                "%.1f 1/s, settled (max speed < 1 mm/s, or the mean height still to 0.1 um per 20 ms, at 5 checks in "
+                "a row; else %.0f s); shadow rasterised at 0.5 mm; DC = (shadow - disc) / (specimen - disc)\n\n",
+                disc_radius * 1e3, (drop_height + 0.001) * 1e3, drag, max_time);
+    std::printf("| fabric | h (mm) | %s | DC | folds | r min (mm) | r max (mm) | sim s | steps | wall s |\n",
+                square ? "N" : "particles");
     std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for (const std::string& name : fabrics)
         for (double h : spacings) {
-            const CusickResult r = run_cusick(textile_fabric(name), h, drag, max_time);
-            std::printf("| %s | %.1f | %u | %.3f | %d | %.1f | %.1f | %.2f%s | %zu | %.1f |\n", name.c_str(), h * 1e3,
-                        r.n, r.dc, r.folds, r.r_min * 1e3, r.r_max * 1e3, r.settle.sim_time,
-                        r.settle.settled ? "" : " (not settled)", r.settle.steps, r.settle.wall);
+            const Fabric fabric = textile_fabric(name);
+            const CusickResult r = square ? run_cusick_square(fabric, h, drag, max_time)
+                                          : run_cusick_circle(fabric, h, drag, max_time);
+            std::printf("| %s | %.1f | %zu | %.3f | %d | %.1f | %.1f | %.2f%s | %zu | %.1f |\n", name.c_str(), h * 1e3,
+                        square ? std::size_t(r.n) : r.particles, r.dc, r.folds, r.r_min * 1e3, r.r_max * 1e3,
+                        r.settle.sim_time, r.settle.settled ? "" : " (not settled)", r.settle.steps, r.settle.wall);
             std::fflush(stdout);
             if (!opt.png_dir.empty() && h == spacings.back()) {
-                const std::string path = opt.png_dir + "/cusick_" + name + ".png";
-                if (!write_top_view_png(r.view, path, disc_radius, 0.15))
+                const std::string path = opt.png_dir + (square ? "/cusick_" : "/cusick_circle_") + name + ".png";
+                if (!write_top_view_png(r.view, path, disc_radius, specimen_radius))
                     std::fprintf(stderr, "drape_textile: cannot write %s\n", path.c_str());
                 else
                     std::printf("\n(wrote %s)\n\n", path.c_str());

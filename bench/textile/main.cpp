@@ -3,12 +3,14 @@
 //   drape_textile elastica              Peirce's relation against the exact heavy elastica
 //   drape_textile cantilever [--quick]  Peirce cantilever (ASTM D1388) at 10, 5 (and 2.5) mm, two fabrics, u and v
 //   drape_textile tension               uniaxial tension, u and v, three spacings
-//   drape_textile cusick [--png DIR]    Cusick drape test (ISO 9073-9 geometry) per fabric, three resolutions
+//   drape_textile cusick [--png DIR]    Cusick drape test (ISO 9073-9 geometry) per fabric, three resolutions: the
+//                                       standard 30 cm circle (outline cloth), or with --square a 30 cm square grid
 //   drape_textile hang                  hang scene convergence, N = 32, 64, 128 [256]
 //   drape_textile verlet                Verlet against symplectic Euler at rest, N = 32
 // Options: --threads T (default 1) worker threads; --fabric NAME (repeatable) presets; --quick coarse only; --fine
 // adds the finest resolution; --png DIR (cusick) top views; --n N (repeatable, hang) grid sizes; --static (hang) the
-// settled shape only, no swing; --spacing H (repeatable, cusick) grid spacings in m.
+// settled shape only, no swing; --spacing H (repeatable, cusick) grid spacings in m; --square (cusick) the square
+// grid specimen instead of the circle; --max-time S (cusick) settling time limit (default 6 s).
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
@@ -61,6 +63,14 @@ int main(int argc, char** argv) {
         else if (s == "--fine") opt.fine = true;
         else if (s == "--png" && a + 1 < argc) opt.png_dir = argv[++a];
         else if (s == "--static") opt.static_only = true;
+        else if (s == "--square") opt.square = true;
+        else if (s == "--max-time" && a + 1 < argc) {
+            opt.max_time = std::atof(argv[++a]);
+            if (!(opt.max_time > 0.0 && opt.max_time <= 600.0)) {
+                std::fprintf(stderr, "drape_textile: --max-time must be in (0, 600] s\n");
+                return 2;
+            }
+        }
         else if (s == "--spacing" && a + 1 < argc) opt.spacings.push_back(std::atof(argv[++a]));
         else if (s == "--n" && a + 1 < argc) opt.sizes.push_back(static_cast<std::uint32_t>(std::atoi(argv[++a])));
         else if (s == "--fabric" && a + 1 < argc) opt.fabrics.push_back(argv[++a]);

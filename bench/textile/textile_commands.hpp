@@ -14,6 +14,8 @@ struct Options {
     bool static_only = false; ///< hang: settle from flat without the swing
     std::vector<std::uint32_t> sizes; ///< hang: grid sizes (default 32, 64, 128)
     std::vector<double> spacings;     ///< cusick: grid spacings, m (default 0.02, 0.01, 0.005)
+    double max_time = 0.0;           ///< cusick: settling time limit, s (0: the default, 6 s)
+    bool square = false;              ///< cusick: the 30 cm square grid cloth instead of the standard 30 cm circle
     std::string png_dir;
     std::vector<std::string> fabrics;
 };
