@@ -28,7 +28,8 @@ template <class T> class AlignedArray {
     AlignedArray& operator=(const AlignedArray& other) {
         if (this != &other) {
             reset(other.count_, other.halo_);
-            std::memcpy(base_, other.base_, (count_ + 2 * halo_) * sizeof(T));
+            const std::size_t bytes = (count_ + 2 * halo_) * sizeof(T);
+            if (bytes != 0) std::memcpy(base_, other.base_, bytes); // an empty array has no buffer (memcpy(nullptr))
         }
         return *this;
     }
