@@ -6,6 +6,7 @@
 #include <string>
 
 #include "drape/stability.hpp"
+#include "vbd.hpp"
 
 namespace drape {
 
@@ -66,6 +67,18 @@ void validate_params(const SimulationParams& p) {
               "aero velocity[" + std::to_string(k) + "]", p.aero.velocity[k], "[-100, 100] m/s");
     check(p.strain_limit.every >= 1 && p.strain_limit.every <= 1000, "strain limit interval", p.strain_limit.every,
           "[1, 1000] substeps");
+    if (p.solver == Solver::implicit) {
+        if (p.integrator != Integrator::symplectic_euler)
+            throw InvalidInput("integrator 'verlet' is a choice of the explicit solver only; the implicit solver keeps "
+                               "velocities (use integrator 'euler' with solver 'implicit')");
+        check(p.implicit.iterations >= 1 && p.implicit.iterations <= 1000, "implicit iterations", p.implicit.iterations,
+              "[1, 1000]");
+        check(std::isfinite(p.implicit.tolerance) && p.implicit.tolerance >= 0.0f && p.implicit.tolerance <= 1.0f,
+              "implicit tolerance", p.implicit.tolerance, "[0, 1] (0 = run every iteration)");
+        check(std::isfinite(p.implicit.chebyshev_rho) && p.implicit.chebyshev_rho >= 0.0f &&
+                  p.implicit.chebyshev_rho < 1.0f,
+              "implicit chebyshev rho", p.implicit.chebyshev_rho, "[0, 1) (0 = no acceleration)");
+    }
     if (p.colliders.size() > 64)
         throw InvalidInput("colliders: " + std::to_string(p.colliders.size()) + " given, at most 64 allowed");
     for (std::size_t k = 0; k < p.colliders.size(); ++k) {
@@ -104,6 +117,7 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
     inv_mass_free_ = cloth_.free_inv_mass.size() == n ? cloth_.free_inv_mass : inv_mass_authored_;
     if (params_.strain_limit.ratio > 0.0f) cook_strain_limit();
     if (params_.aero.enabled) cook_aero();
+    if (params_.solver == Solver::implicit) cook_implicit();
 
     StateBuffer& s = buffers_[0];
     std::memcpy(s.x.data(), initial.x.data(), n * sizeof(float));
@@ -149,7 +163,7 @@ KernelPath Simulation::resolve_params(const SimulationParams& params) const {
     if (kernel == KernelPath::grid && !grid_bending)
         throw InvalidInput("kernel 'grid' evaluates only the grid fabric's own bending stencil; this cloth's bending "
                            "elements are general (use csr)");
-    check_stability(cloth_, params);
+    if (params.solver == Solver::explicit_euler) check_stability(cloth_, params); // implicit: any dt
     return kernel;
 }
 
@@ -164,6 +178,7 @@ void Simulation::set_params(const SimulationParams& params) {
     kernel_ = kernel;
     if (params_.strain_limit.ratio > 0.0f) cook_strain_limit();
     if (params_.aero.enabled) cook_aero();
+    if (params_.solver == Solver::implicit) cook_implicit();
     monitor_.init(cloth_, params_);
     rebaseline_ = true;
 }
@@ -174,11 +189,12 @@ void Simulation::set_material(SpringKind kind, SpringMaterial material) {
     next[static_cast<std::size_t>(kind)] = material;
     apply_materials(cloth_, next);
     try {
-        check_stability(cloth_, params_);
+        if (params_.solver == Solver::explicit_euler) check_stability(cloth_, params_);
     } catch (...) {
         apply_materials(cloth_, previous);
         throw;
     }
+    if (!vbd_.colour_offsets.empty()) vbd::refresh_materials(vbd_, cloth_);
     monitor_.init(cloth_, params_);
     rebaseline_ = true;
 }

@@ -163,10 +163,35 @@ kernels::StepContext Simulation::make_context(std::size_t step_index) {
     return c;
 }
 
-template <bool Parallel> void Simulation::step_impl(std::size_t count) {
+template <bool Parallel> void Simulation::explicit_substep() {
     const Integrator integ = params_.integrator;
     const bool wind = params_.wind.enabled;
     const bool seams = !cloth_.seams.empty(), aero = params_.aero.enabled, extra = extra_forces();
+    const kernels::StepContext c = make_context(steps_done_);
+    const bool bending = c.bending;
+    if (aero) aero_forces_stage<Parallel>();
+    if (seams) seam_forces_stage<Parallel>();
+    if (params_.fused) {
+        const kernels::FusedFn fn = integ == Integrator::symplectic_euler
+                                        ? kernels::pick_fused<Integrator::symplectic_euler>(kernel_, wind, extra, bending)
+                                        : kernels::pick_fused<Integrator::verlet>(kernel_, wind, extra, bending);
+        for_each_block<Parallel>(cloth_, [&](std::size_t b, std::size_t begin, std::size_t end) {
+            fn(c, begin, end, b);
+        });
+    } else {
+        for_each_block<Parallel>(cloth_, [&](std::size_t, std::size_t begin, std::size_t end) {
+            kernels::spring_forces_range(c, integ, kernel_, extra, begin, end);
+        });
+        for_each_block<Parallel>(cloth_, [&](std::size_t, std::size_t begin, std::size_t end) {
+            kernels::external_forces_range(c, integ, wind, begin, end);
+        });
+        for_each_block<Parallel>(cloth_, [&](std::size_t b, std::size_t begin, std::size_t end) {
+            kernels::integrate_range(c, integ, begin, end, b);
+        });
+    }
+}
+
+template <bool Parallel> void Simulation::step_impl(std::size_t count) {
     if (grabbed_ != SIZE_MAX && grab_target_ != grab_applied_) {
         // The user moved the grab: its speed enters the monitor's speed bound, and the work it did its energy
         // balance (restarted below, after the grabbed particle has moved).
@@ -181,29 +206,14 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
         monitor_.rebaseline<Parallel>(cloth_, params_, cur(), steps_done_);
         rebaseline_ = false;
     }
+    const bool implicit = params_.solver == Solver::implicit;
+    // An implicit step is a whole frame's worth of substeps: the monitor looks after every few.
+    const std::size_t check_every = implicit ? 8 : HealthMonitor::check_every;
     for (std::size_t n = 0; n < count; ++n) {
-        const kernels::StepContext c = make_context(steps_done_);
-        const bool bending = c.bending;
-        if (aero) aero_forces_stage<Parallel>();
-        if (seams) seam_forces_stage<Parallel>();
-        if (params_.fused) {
-            const kernels::FusedFn fn = integ == Integrator::symplectic_euler
-                                            ? kernels::pick_fused<Integrator::symplectic_euler>(kernel_, wind, extra, bending)
-                                            : kernels::pick_fused<Integrator::verlet>(kernel_, wind, extra, bending);
-            for_each_block<Parallel>(cloth_, [&](std::size_t b, std::size_t begin, std::size_t end) {
-                fn(c, begin, end, b);
-            });
-        } else {
-            for_each_block<Parallel>(cloth_, [&](std::size_t, std::size_t begin, std::size_t end) {
-                kernels::spring_forces_range(c, integ, kernel_, extra, begin, end);
-            });
-            for_each_block<Parallel>(cloth_, [&](std::size_t, std::size_t begin, std::size_t end) {
-                kernels::external_forces_range(c, integ, wind, begin, end);
-            });
-            for_each_block<Parallel>(cloth_, [&](std::size_t b, std::size_t begin, std::size_t end) {
-                kernels::integrate_range(c, integ, begin, end, b);
-            });
-        }
+        if (implicit)
+            implicit_step<Parallel>();
+        else
+            explicit_substep<Parallel>();
         check_blocks(steps_done_);
         // Strain limiting and collisions: when limiting is due, each sweep is followed by a collide (both honoured:
         // a point a collider moved is limited again, and collide runs last); otherwise collide alone.
@@ -212,7 +222,7 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
         if (!strain_limit_stage<Parallel>(out, collide) && collide) collide_stage<Parallel>(out);
         current_ = 1 - current_;
         ++steps_done_;
-        if (steps_done_ % HealthMonitor::check_every == 0) check_health<Parallel>();
+        if (steps_done_ % check_every == 0) check_health<Parallel>();
     }
 }
 

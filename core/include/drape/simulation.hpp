@@ -23,6 +23,7 @@
 #include "drape/colouring.hpp"
 #include "drape/errors.hpp"
 #include "drape/health_monitor.hpp"
+#include "drape/implicit.hpp"
 
 namespace drape {
 
@@ -75,8 +76,12 @@ struct AeroWind {
 };
 
 struct SimulationParams {
-    float dt = 0.0f; ///< s, one substep; must be below the explicit stability bound (stability.hpp)
-    Integrator integrator = Integrator::symplectic_euler;
+    /// s: one explicit substep, which must be below the explicit stability bound (stability.hpp), or one implicit
+    /// step (any length up to 0.1 s, typically a frame).
+    float dt = 0.0f;
+    Solver solver = Solver::explicit_euler;
+    Integrator integrator = Integrator::symplectic_euler; ///< explicit solver only (implicit: symplectic_euler)
+    ImplicitParams implicit;                              ///< implicit solver only
     std::array<float, 3> gravity{0.0f, -9.81f, 0.0f}; ///< m/s^2
     float air_drag = 0.2f;                            ///< 1/s: F = -m kr v (001 eq 4), 0..100
     WindField wind;
@@ -116,7 +121,7 @@ class Simulation {
     /// parameter and the allowed range. Allocates all state and scratch here, never in step().
     Simulation(Cloth cloth, const InitialState& initial, const SimulationParams& params);
 
-    /// Advances `count` substeps of params().dt. Parallel over fixed particle blocks with oneTBB (the thread
+    /// Advances `count` steps of params().dt: explicit substeps, or implicit steps (params().solver). Parallel over fixed particle blocks with oneTBB (the thread
     /// count is the caller's: call it inside drape::Workers::run, workers.hpp). Throws SimulationError naming
     /// the step and the particle if any value becomes non-finite; the state is then left at the last finite
     /// step. Every HealthMonitor::check_every substeps (counted from 0, whatever `count` is) the health monitor
@@ -173,6 +178,11 @@ class Simulation {
     /// The grabbed particle, or SIZE_MAX.
     std::size_t grabbed() const noexcept { return grabbed_; }
 
+    /// Figures of the last implicit step (iterations, residual); zeros before the first.
+    const ImplicitStats& implicit_stats() const noexcept { return implicit_stats_; }
+    /// The implicit solver's cooked data (empty until the implicit solver is first chosen).
+    const VbdGraph& vbd_graph() const noexcept { return vbd_; }
+
     /// Direct access for tests and benchmarks (current buffer and the cooked data).
     const StateBuffer& state() const noexcept { return cur(); }
 
@@ -191,6 +201,20 @@ class Simulation {
 
   private:
     template <bool Parallel> void step_impl(std::size_t count);
+    /// One explicit substep from buffer A into buffer B (substep.cpp).
+    template <bool Parallel> void explicit_substep();
+    /// One implicit step from buffer A into buffer B (implicit_step.cpp).
+    template <bool Parallel> void implicit_step();
+    /// Cooks the implicit solver's graph and scratch (when first chosen).
+    void cook_implicit();
+    VbdGraph vbd_;
+    ImplicitStats implicit_stats_;
+    // Implicit scratch, particle_count each: the inertial prediction y; Chebyshev's two previous iterates; Jacobi's
+    // new positions.
+    std::vector<float> pred_x_, pred_y_, pred_z_, cheb1_x_, cheb1_y_, cheb1_z_, cheb2_x_, cheb2_y_, cheb2_z_;
+    std::vector<float> jac_x_, jac_y_, jac_z_;
+    std::vector<double> chunk_residual_;         ///< per fixed chunk of a sweep: sum of |g_i|^2
+    std::vector<std::uint32_t> colour_chunk_base_; ///< per colour: its first chunk in chunk_residual_
     kernels::StepContext make_context(std::size_t step_index);
     KernelPath resolve_params(const SimulationParams& params) const;
     void check_blocks(std::size_t step_index);

@@ -1,0 +1,74 @@
+// The implicit (backward Euler) solver's parameters, its cooked per-vertex data and its per-step figures.
+//
+// One implicit step of length h minimises the variational form of backward Euler over the movable particles,
+//   G(x) = sum_i m_i/(2 h^2) |x_i - y_i|^2 + sum_i m_i kr/(2 h) |x_i - x_i^n|^2 + E(x) + D(x) - f_ext . x,
+// y = x^n + h v^n + h^2 a_ext the inertial prediction, E every elastic energy of the cloth (springs of every kind,
+// seams included; bending, bending.hpp) and D the Rayleigh damping written as a potential of the step (spring
+// damping along the direction at the start of the step, bending damping beta/(2h) |x - x^n|_Q^2). Every term is
+// written out with its gradient and Hessian in docs/implicit.md; the exact reference (implicit_reference.hpp) and the
+// fast solver minimise the same G.
+//
+// The fast solver is vertex block descent (Chen, Liu, Yang and Yuksel 2024, "Vertex Block Descent", ACM TOG 43(4)):
+// Gauss-Seidel over vertices, each vertex taking one Newton step of G restricted to its own three coordinates (a 3x3
+// solve with the projected, positive-definite local Hessian), vertices of one colour (no energy term couples two of
+// them) in parallel, colours in a fixed order; then optional Chebyshev acceleration (Wang 2015) of the sweeps.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace drape {
+
+/// Which solver advances the cloth.
+enum class Solver : std::uint8_t {
+    explicit_euler, ///< the seeds' explicit substeps (SimulationParams::integrator), dt below the stability bound
+    implicit,       ///< backward Euler by vertex block descent, any dt up to 0.1 s
+};
+const char* solver_name(Solver solver) noexcept; ///< "explicit" / "implicit"
+
+/// Iteration method of the implicit solver.
+enum class ImplicitMethod : std::uint8_t {
+    gauss_seidel, ///< vertex block descent: colours in order, each vertex sees its neighbours' newest positions
+    jacobi,       ///< every vertex from the previous sweep's positions (the parallel-everything variant; slower)
+};
+
+struct ImplicitParams {
+    std::uint32_t iterations = 30;  ///< sweeps per step (the most, with a tolerance), 1..1000
+    /// Stop early once the sweep residual is below tolerance x the first sweep's (0 = always run `iterations`), 0..1.
+    float tolerance = 0.0f;
+    /// Chebyshev acceleration's estimate of the sweep's spectral radius, [0, 1); 0 = off.
+    float chebyshev_rho = 0.9f;
+    ImplicitMethod method = ImplicitMethod::gauss_seidel;
+};
+
+/// Figures of the last implicit step.
+struct ImplicitStats {
+    std::uint32_t iterations = 0;  ///< sweeps run
+    /// Sweep residual of the last sweep over the first: sqrt(sum_i |g_i|^2) with g_i the gradient of G at vertex i
+    /// when the sweep visits it (Gauss-Seidel: with its neighbours' newest positions); 0 when nothing moves.
+    double relative_residual = 0.0;
+    double first_residual = 0.0;   ///< N, the first sweep's sqrt(sum |g_i|^2)
+    double last_residual = 0.0;    ///< N
+};
+
+/// Cooked for vertex block descent (built once per cloth): every energy term a vertex takes part in, and the vertex
+/// colouring.
+struct VbdGraph {
+    std::size_t particle_count = 0;
+    // Springs at each vertex (every Cloth::edges entry, seams and the springs model's bend springs included), CSR
+    // sorted by neighbour: the neighbour, k = material stiffness x Edge::scale (N/m), kd (N*s/m), rest length (m).
+    std::vector<std::uint32_t> spring_offsets, spring_neighbour, spring_edge;
+    std::vector<float> spring_k, spring_kd, spring_rest;
+    // Bending: Q's rows (off-diagonal Q_ij and the diagonal Q_ii), N/m, in float; beta in s.
+    std::vector<std::uint32_t> bend_offsets, bend_neighbour;
+    std::vector<float> bend_q, bend_diag;
+    float bend_beta = 0.0f;
+    // Colours: vertices of colour c are colour_vertex[colour_offsets[c] .. colour_offsets[c + 1]), ascending; no
+    // spring and no bending element joins two vertices of one colour. Greedy in index order.
+    std::vector<std::uint32_t> colour_offsets, colour_vertex;
+
+    std::size_t colour_count() const noexcept { return colour_offsets.empty() ? 0 : colour_offsets.size() - 1; }
+};
+
+} // namespace drape

@@ -1,0 +1,132 @@
+// Vertex block descent's local step (Chen et al. 2024, section 3): for one vertex i, the gradient g_i and the
+// projected 3x3 Hessian H_i of the implicit step's objective G (implicit.hpp; docs/implicit.md) restricted to x_i,
+// then x_i -= H_i^-1 g_i. Scalar, float; the serial and the parallel sweeps call the same function, so they agree bit
+// for bit.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "drape/cloth.hpp"
+#include "drape/implicit.hpp"
+
+namespace drape::vbd {
+
+/// Cooks the springs, the bending rows and the vertex colouring of a cloth.
+VbdGraph cook(const Cloth& cloth);
+/// Refreshes the springs' k and kd from the cloth's materials (after Simulation::set_material).
+void refresh_materials(VbdGraph& graph, const Cloth& cloth);
+
+/// Everything one sweep reads: the state at the start of the step, the inertial prediction, the iterate.
+struct SweepArgs {
+    const float* __restrict x0; ///< x^n
+    const float* __restrict y0;
+    const float* __restrict z0;
+    const float* __restrict px; ///< inertial prediction y = x^n + h v^n + h^2 a (minus f_ext h^2 / m folded in)
+    const float* __restrict py;
+    const float* __restrict pz;
+    const float* x; ///< the iterate (read; Gauss-Seidel writes it in place, Jacobi into out_*)
+    const float* y;
+    const float* z;
+    const float* __restrict inv_mass;
+    const VbdGraph* graph;
+    float inv_h2;      ///< 1 / h^2
+    float drag_over_h; ///< kr / h
+    float inv_h;       ///< 1 / h
+};
+
+/// The local Newton step of vertex i (movable): writes the new position and returns |g_i|^2 (N^2).
+inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noexcept {
+    const VbdGraph& g = *a.graph;
+    const float xi = a.x[i], yi = a.y[i], zi = a.z[i];
+    const float dxi = xi - a.x0[i], dyi = yi - a.y0[i], dzi = zi - a.z0[i]; // this step's displacement
+    const float m = 1.0f / a.inv_mass[i];
+    // Inertia and air drag: m/h^2 (x - y) + m kr/h (x - x^n).
+    const float mi = m * a.inv_h2, md = m * a.drag_over_h;
+    float gx = mi * (xi - a.px[i]) + md * dxi;
+    float gy = mi * (yi - a.py[i]) + md * dyi;
+    float gz = mi * (zi - a.pz[i]) + md * dzi;
+    float hxx = mi + md, hyy = hxx, hzz = hxx, hxy = 0.0f, hxz = 0.0f, hyz = 0.0f;
+    // Springs: E = k/2 (L - l)^2, grad_i = -k (L - l) u (u from i to j); projected Hessian k (c I + (1 - c) u u^T),
+    // c = max(0, 1 - l/L). Damping along n, the direction at the start of the step: grad_i = -(kd/h) (dd . n) n,
+    // dd = (x_j - x_j^n) - (x_i - x_i^n); Hessian (kd/h) n n^T.
+    for (std::uint32_t e = g.spring_offsets[i], end = g.spring_offsets[i + 1]; e < end; ++e) {
+        const std::uint32_t j = g.spring_neighbour[e];
+        const float k = g.spring_k[e], l = g.spring_rest[e];
+        const float dx = a.x[j] - xi, dy = a.y[j] - yi, dz = a.z[j] - zi;
+        const float len2 = dx * dx + dy * dy + dz * dz;
+        if (len2 > 1e-24f) {
+            const float inv_len = 1.0f / std::sqrt(len2);
+            const float len = len2 * inv_len;
+            const float ux = dx * inv_len, uy = dy * inv_len, uz = dz * inv_len;
+            const float s = k * (len - l);
+            gx -= s * ux;
+            gy -= s * uy;
+            gz -= s * uz;
+            const float c = k * std::max(0.0f, 1.0f - l * inv_len), cu = k - c;
+            hxx += c + cu * ux * ux;
+            hyy += c + cu * uy * uy;
+            hzz += c + cu * uz * uz;
+            hxy += cu * ux * uy;
+            hxz += cu * ux * uz;
+            hyz += cu * uy * uz;
+        } else if (l == 0.0f) { // a zero-length spring at its rest: E = k/2 |d|^2, Hessian k I
+            hxx += k;
+            hyy += k;
+            hzz += k;
+        }
+        const float kd = g.spring_kd[e] * a.inv_h;
+        if (kd > 0.0f) {
+            const float nx = a.x0[j] - a.x0[i], ny = a.y0[j] - a.y0[i], nz = a.z0[j] - a.z0[i];
+            const float n2 = nx * nx + ny * ny + nz * nz;
+            if (n2 > 1e-24f) {
+                const float inv_n2 = 1.0f / n2;
+                const float ddx = (a.x[j] - a.x0[j]) - dxi, ddy = (a.y[j] - a.y0[j]) - dyi,
+                            ddz = (a.z[j] - a.z0[j]) - dzi;
+                const float p = kd * (ddx * nx + ddy * ny + ddz * nz) * inv_n2; // kd (dd . n) / |n|^2 ...
+                gx -= p * nx;
+                gy -= p * ny;
+                gz -= p * nz;
+                const float q = kd * inv_n2;
+                hxx += q * nx * nx;
+                hyy += q * ny * ny;
+                hzz += q * nz * nz;
+                hxy += q * nx * ny;
+                hxz += q * nx * nz;
+                hyz += q * ny * nz;
+            }
+        }
+    }
+    // Bending: grad_i = sum_j Q_ij [(x_j - x_i) + beta/h ((x_j - x_j^n) - (x_i - x_i^n))] (rows of Q sum to 0),
+    // Hessian Q_ii (1 + beta/h) I.
+    if (!g.bend_diag.empty()) {
+        const float bh = g.bend_beta * a.inv_h;
+        float bx = 0.0f, by = 0.0f, bz = 0.0f;
+        for (std::uint32_t e = g.bend_offsets[i], end = g.bend_offsets[i + 1]; e < end; ++e) {
+            const std::uint32_t j = g.bend_neighbour[e];
+            const float q = g.bend_q[e];
+            bx += q * ((a.x[j] - xi) + bh * ((a.x[j] - a.x0[j]) - dxi));
+            by += q * ((a.y[j] - yi) + bh * ((a.y[j] - a.y0[j]) - dyi));
+            bz += q * ((a.z[j] - zi) + bh * ((a.z[j] - a.z0[j]) - dzi));
+        }
+        gx += bx;
+        gy += by;
+        gz += bz;
+        const float d = g.bend_diag[i] * (1.0f + bh);
+        hxx += d;
+        hyy += d;
+        hzz += d;
+    }
+    // x_i -= H^-1 g by the adjugate (H is symmetric positive definite: the inertia term alone is m/h^2 I).
+    const float c00 = hyy * hzz - hyz * hyz, c01 = hxz * hyz - hxy * hzz, c02 = hxy * hyz - hxz * hyy;
+    const float c11 = hxx * hzz - hxz * hxz, c12 = hxy * hxz - hxx * hyz, c22 = hxx * hyy - hxy * hxy;
+    const float det = hxx * c00 + hxy * c01 + hxz * c02;
+    const float inv_det = 1.0f / det;
+    out[0] = xi - (c00 * gx + c01 * gy + c02 * gz) * inv_det;
+    out[1] = yi - (c01 * gx + c11 * gy + c12 * gz) * inv_det;
+    out[2] = zi - (c02 * gx + c12 * gy + c22 * gz) * inv_det;
+    return gx * gx + gy * gy + gz * gz;
+}
+
+} // namespace drape::vbd
