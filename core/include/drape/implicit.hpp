@@ -40,6 +40,9 @@ struct ImplicitParams {
     /// Chebyshev acceleration's estimate of the sweep's spectral radius, [0, 1); 0 = off.
     float chebyshev_rho = 0.9f;
     ImplicitMethod method = ImplicitMethod::gauss_seidel;
+    /// On a grid cloth of the fabric model: start each step from the same step solved on coarser grids of the same
+    /// fabric (coarsest first, each level's displacement interpolated onto the next as its initial guess).
+    bool multilevel = true;
 };
 
 /// Figures of the last implicit step.
@@ -50,6 +53,7 @@ struct ImplicitStats {
     double relative_residual = 0.0;
     double first_residual = 0.0;   ///< N, the first sweep's sqrt(sum |g_i|^2)
     double last_residual = 0.0;    ///< N
+    std::uint32_t levels = 1;      ///< grids solved this step (1 + coarse levels)
 };
 
 /// Cooked for vertex block descent (built once per cloth): every energy term a vertex takes part in, and the vertex
