@@ -372,12 +372,12 @@ NewtonResult newton_reference(const ImplicitProblem& p, std::span<const double> 
         for (int halving = 0; halving < 60 && !accepted; ++halving, alpha *= 0.5) {
             for (int k = 0; k < dim; ++k) xt[std::size_t(k)] = r.x[std::size_t(k)] + alpha * step[k];
             Gt = objective_and_magnitude(p, xt, mt);
-            if (std::isfinite(Gt) && Gt <= G + 1e-4 * alpha * slope) {
-                accepted = true;
-            } else if (-alpha * slope <= rounding) {
+            if (-alpha * slope <= rounding) { // G cannot see the decrease (Armijo would pass or fail on noise)
                 gradient_unchecked(p, xt, {gt.data(), 3 * n});
-                if (norm_unchecked(p, {gt.data(), 3 * n}) < gnorm) accepted = true;
+                if (std::isfinite(Gt) && norm_unchecked(p, {gt.data(), 3 * n}) < gnorm) accepted = true;
                 else break; // below the rounding floor and no better: nothing left to gain
+            } else if (std::isfinite(Gt) && Gt <= G + 1e-4 * alpha * slope) {
+                accepted = true;
             }
             if (accepted) break;
         }
