@@ -27,6 +27,9 @@ enum class Solver : std::uint8_t {
 };
 const char* solver_name(Solver solver) noexcept; ///< "explicit" / "implicit"
 
+/// The implicit step when a scene or flag gives none: one frame at 30 FPS, s.
+inline constexpr float implicit_default_dt = 1.0f / 30.0f;
+
 /// Iteration method of the implicit solver.
 enum class ImplicitMethod : std::uint8_t {
     gauss_seidel, ///< vertex block descent: colours in order, each vertex sees its neighbours' newest positions
