@@ -35,7 +35,7 @@ std::vector<Solver> solvers() {
     return {{"explicit", [](SceneSpec&) {}},
             {"implicit", [](SceneSpec& s) {
                  s.physics.solver = drape::Solver::implicit;
-                 s.physics.implicit.iterations = 4;
+                 s.physics.implicit.iterations = 12;
                  s.dt = 1.0f / 30.0f;
              }}};
 }

@@ -89,8 +89,8 @@ TEST_P(NoAllocation, StepDoesNotAllocate) {
         if (c.solver == Solver::implicit) { // the multilevel guess, Chebyshev, strain limiting after each step
             p.solver = Solver::implicit;
             p.dt = 1.0f / 30.0f;
-            p.implicit.iterations = 3;
-            p.strain_limit.ratio = 0.1f;
+            p.implicit.iterations = 10;
+            p.strain_limit.ratio = 0.2f;
         }
         Simulation sim(std::move(scene.cloth), scene.initial, p);
         sim.step(5); // warm-up: the thread pool starts here
@@ -122,8 +122,6 @@ INSTANTIATE_TEST_SUITE_P(
                       AllocCase{KernelPath::grid, false, Integrator::verlet, false, MaterialModel::fabric},
                       AllocCase{KernelPath::csr, true, Integrator::symplectic_euler, false, MaterialModel::fabric},
                       AllocCase{KernelPath::grid, true, Integrator::symplectic_euler, true, MaterialModel::fabric,
-                                Solver::implicit},
-                      AllocCase{KernelPath::grid, true, Integrator::symplectic_euler, true, MaterialModel::springs,
                                 Solver::implicit}));
 
 // The viewer's strain-colouring stage runs every frame: cooked once, then compute() allocates nothing.

@@ -18,8 +18,12 @@ template <bool Parallel> void Simulation::collide_stage(StateBuffer& out) {
     const bool verlet = params_.integrator == Integrator::verlet;
     const float dt = params_.dt, inv_dt = 1.0f / params_.dt;
     // Positions at the start of the substep: where a point stuck between overlapping colliders is held.
+    // The implicit solver keeps points out during its sweeps, from the side each came from (vbd::contact_project):
+    // what is left is rounding, projected without holding.
     const StateBuffer& start = buffers_[current_];
-    const float *hx = start.x.data(), *hy = start.y.data(), *hz = start.z.data();
+    const bool hold = params_.solver == Solver::explicit_euler;
+    const float *hx = hold ? start.x.data() : nullptr, *hy = hold ? start.y.data() : nullptr,
+                *hz = hold ? start.z.data() : nullptr;
     auto block = [&](std::size_t b) {
         const std::size_t begin = b * block_particles, end = std::min(begin + block_particles, n);
         if (!verlet) {

@@ -105,6 +105,42 @@ VbdGraph cook(const Cloth& cloth) {
     return g;
 }
 
+float contact_project(std::span<const Collider> colliders, const float p0[3], float p[3], float normal[3]) noexcept {
+    float mu = -1.0f;
+    for (const Collider& c : colliders) {
+        if (!is_inside(c, {p[0], p[1], p[2]})) continue;
+        if (is_inside(c, {p0[0], p0[1], p0[2]})) { // started inside: the nearest surface point
+            const Contact ct = project_point(c, {p[0], p[1], p[2]});
+            for (int k = 0; k < 3; ++k) {
+                p[k] = ct.point[k];
+                normal[k] = ct.normal[k];
+            }
+            mu = c.friction;
+            continue;
+        }
+        float lo = 0.0f, hi = 1.0f; // p0 + lo (p - p0) outside, p0 + hi (p - p0) inside
+        for (int it = 0; it < 20; ++it) {
+            const float mid = 0.5f * (lo + hi);
+            const Vec3f q{p0[0] + mid * (p[0] - p0[0]), p0[1] + mid * (p[1] - p0[1]), p0[2] + mid * (p[2] - p0[2])};
+            (is_inside(c, q) ? hi : lo) = mid;
+        }
+        const Contact ct = project_point(c, {p0[0] + hi * (p[0] - p0[0]), p0[1] + hi * (p[1] - p0[1]),
+                                             p0[2] + hi * (p[2] - p0[2])});
+        // Onto the tangent plane through the entry point.
+        const float depth = (p[0] - ct.point[0]) * ct.normal[0] + (p[1] - ct.point[1]) * ct.normal[1] +
+                            (p[2] - ct.point[2]) * ct.normal[2];
+        if (depth < 0.0f)
+            for (int k = 0; k < 3; ++k) p[k] -= depth * ct.normal[k];
+        for (int k = 0; k < 3; ++k) normal[k] = ct.normal[k];
+        mu = c.friction;
+        if (is_inside(c, {p[0], p[1], p[2]})) { // a curved surface: the tangent plane can still be inside
+            const Contact out = project_point(c, {p[0], p[1], p[2]});
+            for (int k = 0; k < 3; ++k) p[k] = out.point[k];
+        }
+    }
+    return mu;
+}
+
 namespace {
 constexpr std::size_t vbd_chunk = 256; ///< vertices per parallel chunk of a colour (fixed: determinism)
 }
@@ -113,7 +149,7 @@ void Solver::cook(const Cloth& cloth) {
     graph_ = vbd::cook(cloth);
     const std::size_t n = cloth.particle_count;
     for (std::vector<float>* a : {&pred_x_, &pred_y_, &pred_z_, &cheb1_x_, &cheb1_y_, &cheb1_z_, &cheb2_x_, &cheb2_y_,
-                                  &cheb2_z_, &jac_x_, &jac_y_, &jac_z_})
+                                  &cheb2_z_, &jac_x_, &jac_y_, &jac_z_, &contact_nx_, &contact_ny_, &contact_nz_, &contact_mu_})
         a->assign(n, 0.0f);
     colour_chunk_base_.assign(graph_.colour_count() + 1, 0);
     for (std::size_t c = 0; c < graph_.colour_count(); ++c) {
@@ -134,7 +170,9 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     const SweepArgs args{st.x0,         st.y0,         st.z0, pred_x_.data(), pred_y_.data(), pred_z_.data(), x, y, z,
                          inv_mass,      &graph_,       inv_h * inv_h, air_drag * inv_h, inv_h};
     const bool jacobi = ip.method == ImplicitMethod::jacobi;
-    const bool chebyshev = ip.chebyshev_rho > 0.0f;
+    // Chebyshev's extrapolation and contact disagree (it throws points a collider holds back into the air: a cloth
+    // resting on the ground bounced 3 cm, measured), so with colliders the sweeps run plain.
+    const bool chebyshev = ip.chebyshev_rho > 0.0f && st.colliders.empty();
     const float rho2 = ip.chebyshev_rho * ip.chebyshev_rho;
     const std::size_t blocks = (n + block_particles - 1) / block_particles;
     float omega = 1.0f;
@@ -143,6 +181,37 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
         std::copy_n(y, n, cheb1_y_.data());
         std::copy_n(z, n, cheb1_z_.data());
     }
+    // Contact, vertex by vertex right after its local step (its neighbours then never see it inside a collider):
+    // out of every collider from the side the step came from; the normal of the last contact is kept for friction.
+    const bool contact = !st.colliders.empty();
+    // Coulomb friction in the same place: the step's tangential displacement loses up to mu times the normal
+    // displacement the contact holds the point away from its inertial prediction (stick when it is smaller).
+    auto keep_out = [&](std::size_t i, float p[3]) {
+        const float p0[3] = {st.x0[i], st.y0[i], st.z0[i]};
+        float normal[3] = {0.0f, 0.0f, 0.0f};
+        const float mu = contact_project(st.colliders, p0, p, normal);
+        if (mu < 0.0f) {
+            contact_nx_[i] = contact_ny_[i] = contact_nz_[i] = 0.0f;
+            return;
+        }
+        if (mu > 0.0f) {
+            const float held = (p[0] - pred_x_[i]) * normal[0] + (p[1] - pred_y_[i]) * normal[1] +
+                               (p[2] - pred_z_[i]) * normal[2];
+            const float dx = p[0] - p0[0], dy = p[1] - p0[1], dz = p[2] - p0[2];
+            const float dn = dx * normal[0] + dy * normal[1] + dz * normal[2];
+            const float tx = dx - dn * normal[0], ty = dy - dn * normal[1], tz = dz - dn * normal[2];
+            const float t = std::sqrt(tx * tx + ty * ty + tz * tz);
+            const float limit = mu * std::max(held, 0.0f);
+            const float keep = t > limit ? 1.0f - limit / t : 0.0f; // the part of the tangential displacement kept
+            p[0] -= (1.0f - keep) * tx;
+            p[1] -= (1.0f - keep) * ty;
+            p[2] -= (1.0f - keep) * tz;
+        }
+        contact_nx_[i] = normal[0];
+        contact_ny_[i] = normal[1];
+        contact_nz_[i] = normal[2];
+        contact_mu_[i] = mu;
+    };
     ImplicitStats stats;
     for (std::uint32_t it = 0; it < ip.iterations; ++it) {
         std::size_t chunks_used = 0;
@@ -159,6 +228,7 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
                         if (inv_mass[i] == 0.0f) continue;
                         float out[3];
                         r += solve_vertex(args, i, out);
+                        if (contact) keep_out(i, out);
                         x[i] = out[0];
                         y[i] = out[1];
                         z[i] = out[2];
@@ -173,7 +243,10 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
                 double r = 0.0;
                 for (std::size_t i = ch * vbd_chunk, hi = std::min(n, (ch + 1) * vbd_chunk); i < hi; ++i) {
                     float out[3] = {x[i], y[i], z[i]};
-                    if (inv_mass[i] != 0.0f) r += solve_vertex(args, static_cast<std::uint32_t>(i), out);
+                    if (inv_mass[i] != 0.0f) {
+                        r += solve_vertex(args, static_cast<std::uint32_t>(i), out);
+                        if (contact) keep_out(i, out);
+                    }
                     jac_x_[i] = out[0];
                     jac_y_[i] = out[1];
                     jac_z_[i] = out[2];

@@ -8,7 +8,10 @@
 #include <cstddef>
 #include <cstdint>
 
+#include <span>
+
 #include "drape/cloth.hpp"
+#include "drape/colliders.hpp"
 #include "drape/implicit.hpp"
 
 namespace drape::vbd {
@@ -27,7 +30,15 @@ struct LevelState {
     float* y;
     float* z;
     const float* inv_mass; ///< 0 = fixed at x^n
+    std::span<const Collider> colliders; ///< kept out of during the sweeps (contact_project)
 };
+
+/// Contact inside the sweeps: if p is inside a collider (its inflated solid, colliders.hpp), moves it onto the tangent
+/// plane of the inflated surface at the point where the segment from p0 (x^n) first enters it (bisection on the
+/// segment; p0 inside already: the nearest surface point instead), so a step far longer than a collider is thin
+/// never carries a point through it. Returns the collider's friction and writes the unit normal, or returns -1 when p
+/// touches no collider.
+float contact_project(std::span<const Collider> colliders, const float p0[3], float p[3], float normal[3]) noexcept;
 
 /// The sweeps of one cloth (one level of the multilevel solve, or the only one): its cooked graph and scratch.
 class Solver {
@@ -40,6 +51,12 @@ class Solver {
     float* pred_x() noexcept { return pred_x_.data(); }
     float* pred_y() noexcept { return pred_y_.data(); }
     float* pred_z() noexcept { return pred_z_.data(); }
+    /// Per vertex after run(): the unit normal of the contact that held it in the last sweep (0 0 0: none) and the
+    /// collider's friction.
+    const float* contact_nx() const noexcept { return contact_nx_.data(); }
+    const float* contact_ny() const noexcept { return contact_ny_.data(); }
+    const float* contact_nz() const noexcept { return contact_nz_.data(); }
+    const float* contact_mu() const noexcept { return contact_mu_.data(); }
     /// Runs the sweeps of one step of length h with air drag kr (1/s). No allocation.
     template <bool Parallel>
     ImplicitStats run(const LevelState& s, const ImplicitParams& params, float h, float air_drag);
@@ -48,6 +65,7 @@ class Solver {
     VbdGraph graph_;
     std::vector<float> pred_x_, pred_y_, pred_z_, cheb1_x_, cheb1_y_, cheb1_z_, cheb2_x_, cheb2_y_, cheb2_z_;
     std::vector<float> jac_x_, jac_y_, jac_z_;
+    std::vector<float> contact_nx_, contact_ny_, contact_nz_, contact_mu_;
     std::vector<double> chunk_residual_;          ///< per fixed chunk of a sweep: sum of |g_i|^2
     std::vector<std::uint32_t> colour_chunk_base_; ///< per colour: its first chunk in chunk_residual_
 };
