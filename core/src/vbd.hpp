@@ -196,21 +196,27 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
     float ddz = -(c02 * gx + c12 * gy + c22 * gz) * inv_det;
     // Backtracking line search on the local objective (the projected Hessian makes the step a descent direction,
     // but a vertex between nearly parallel springs can overshoot far): halve the step until G does not rise.
-    // In double, as differences (close to convergence the change is far below float's resolution of G).
-    auto change = [&](double px, double py, double pz) {
-        double e = qgx * px + qgy * py + qgz * pz +
-                   0.5 * (double(qhxx) * px * px + double(qhyy) * py * py + double(qhzz) * pz * pz) +
-                   double(qhxy) * px * py + double(qhxz) * px * pz + double(qhyz) * py * pz;
+    // As differences, so the change keeps its digits close to convergence (where it is far below float's resolution
+    // of G itself): a spring's stretch energy changes by k/2 (L1 - L0) (L1 + L0 - 2 l), and L1 - L0 =
+    // (|p|^2 - 2 d . p) / (L1 + L0) for a move p of vertex i (d = x_j - x_i) has no cancellation.
+    auto change = [&](float px, float py, float pz) {
+        float e = qgx * px + qgy * py + qgz * pz +
+                  0.5f * (qhxx * px * px + qhyy * py * py + qhzz * pz * pz) + qhxy * px * py + qhxz * px * pz +
+                  qhyz * py * pz;
+        const float p2 = px * px + py * py + pz * pz;
         for (std::uint32_t s = g.spring_offsets[i], end = g.spring_offsets[i + 1]; s < end; ++s) {
             const std::uint32_t j = g.spring_neighbour[s];
-            const double dx = double(a.x[j]) - xi, dy = double(a.y[j]) - yi, dz = double(a.z[j]) - zi;
-            const double l0 = std::sqrt(dx * dx + dy * dy + dz * dz);
-            const double l1 = std::sqrt((dx - px) * (dx - px) + (dy - py) * (dy - py) + (dz - pz) * (dz - pz));
-            e += 0.5 * double(g.spring_k[s]) * (l1 - l0) * (l1 + l0 - 2.0 * double(g.spring_rest[s]));
+            const float dx = a.x[j] - xi, dy = a.y[j] - yi, dz = a.z[j] - zi;
+            const float l0 = std::sqrt(dx * dx + dy * dy + dz * dz);
+            const float l1 = std::sqrt((dx - px) * (dx - px) + (dy - py) * (dy - py) + (dz - pz) * (dz - pz));
+            const float sum = l0 + l1;
+            if (!(sum > 0.0f)) continue;
+            const float dl = (p2 - 2.0f * (dx * px + dy * py + dz * pz)) / sum;
+            e += 0.5f * g.spring_k[s] * dl * (sum - 2.0f * g.spring_rest[s]);
         }
         return e;
     };
-    for (int halving = 0; halving < 8 && change(ddx, ddy, ddz) > 0.0; ++halving) {
+    for (int halving = 0; halving < 8 && change(ddx, ddy, ddz) > 0.0f; ++halving) {
         ddx *= 0.5f;
         ddy *= 0.5f;
         ddz *= 0.5f;
