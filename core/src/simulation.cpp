@@ -257,6 +257,15 @@ std::array<float, 3> Simulation::velocity(std::size_t i) const noexcept {
 }
 
 std::vector<std::string> Simulation::stage_names() const {
+    if (params_.solver == Solver::implicit) { // implicit_step.cpp
+        std::vector<std::string> out{"predict", "vbd_sweeps", "velocity"};
+        if (params_.implicit.multilevel && implicit_ && !implicit_->coarse.empty()) out.insert(out.begin() + 1, "multilevel");
+        if (!params_.colliders.empty()) out.insert(out.end() - 1, "contact");
+        if (params_.aero.enabled) out.insert(out.begin(), "aero_forces");
+        if (params_.strain_limit.ratio > 0.0f) out.push_back("strain_limit");
+        if (!params_.colliders.empty()) out.push_back("collide");
+        return out;
+    }
     std::vector<std::string> out{"external_forces", "spring_forces", "spring_damping", "integrate", "pins"};
     if (params_.wind.enabled) out.insert(out.begin() + 1, "wind");
     if (!cloth_.seams.empty()) out.insert(out.begin() + 2, "seam_forces");
