@@ -53,6 +53,12 @@ int cmd_convergence(const Options& opt) {
         const StepProblem prob = step_problem(start, h);
         const std::vector<double> x0 = prediction(prob);
         const double g0 = objective(prob, x0);
+        const double g0_ref = reference_objective(prob, x0);
+        if (std::isfinite(g0_ref)) {
+            char buf[200];
+            std::snprintf(buf, sizeof buf, "N = %u: G(x_0) here %.12g J, by implicit_reference.hpp %.12g J", n, g0, g0_ref);
+            rep.notes.push_back(buf);
+        }
         std::fprintf(stderr, "convergence: N = %u, t = %.3g s, max speed %.3g m/s\n", n, start.time(),
                      static_cast<double>(start.health().max_speed));
 

@@ -25,8 +25,10 @@ struct Options {
     double duration = 2.0;                 ///< --duration s, the timed run
     double settle_time = 10.0;             ///< --settle-time s, the settled shape
     double explicit_budget = 60.0;         ///< --explicit-budget s of wall time an explicit run may take
+    double explicit_settle_budget = 300.0; ///< --explicit-settle-budget s of wall time for the explicit settle run
     double explicit_short = 0.05;          ///< --explicit-short s simulated when the full run is over budget
-    std::uint32_t newton_max_n = 316;      ///< --newton-max-n: the Eigen reference up to this N, a long run above
+    std::uint32_t newton_max_n = 100;      ///< --newton-max-n: the Eigen reference up to this N, a long run above
+    int newton_iterations = 100;           ///< --newton-iterations: at most this many Newton iterations per reference
     std::uint32_t ref_iterations = 300;    ///< --ref-iterations of the long implicit reference run
     std::uint32_t kmax = 300;              ///< --kmax (convergence) most iterations plotted
     std::string json_out;                  ///< --json-out FILE: the JSON object also written there
@@ -64,6 +66,8 @@ struct NewtonOut {
     int iterations = 0;
     bool converged = false;
 };
+/// G(x) by the reference's own implicit_objective (NaN when absent): a cross-check of objective().
+double reference_objective(const StepProblem& p, const std::vector<double>& x);
 NewtonOut newton_minimise(const StepProblem& p, const std::vector<double>& start, double tolerance, int max_iterations);
 
 /// A static equilibrium near `start` (a settled shape of sim's cloth).

@@ -11,7 +11,9 @@
 // 1/30); --iterations K (default 30); --rho R Chebyshev (default 0.9, 0 = off); --strain-limit R implicit runs'
 // strain limit (default off); --duration S timed run (default 2); --settle-time S (default 10); --explicit-budget S
 // wall seconds an explicit run may take before it is timed over a short interval only (default 60);
-// --explicit-short S that interval (default 0.05); --newton-max-n N Eigen reference up to N (default 316);
+// --explicit-short S that interval (default 0.05); --explicit-settle-budget S wall seconds the explicit settle run
+// may take (default 300; over it the explicit settled shape is not measured); --newton-max-n N Eigen reference up to N (default 100);
+// --newton-iterations K at most K Newton iterations per reference equilibrium (default 100);
 // --ref-iterations K of the long-run reference (default 300); --kmax K (convergence, default 300); --csv FILE or
 // --out DIR (convergence's CSV; default ./convergence.csv); --json-out FILE also writes the JSON object there.
 #include <cstdio>
@@ -48,7 +50,7 @@ int main(int argc, char** argv) {
     if (argc < 2 || std::strcmp(argv[1], "--help") == 0) {
         std::fprintf(stderr, "usage: drape_implicit realtime|convergence|throughput [--n N,..] [--threads T] [--json] "
                              "[--dt S] [--iterations K] [--rho R] [--strain-limit R] [--duration S] [--settle-time S] "
-                             "[--explicit-budget S] [--explicit-short S] [--newton-max-n N] [--ref-iterations K] "
+                             "[--explicit-budget S] [--explicit-settle-budget S] [--explicit-short S] [--newton-max-n N] [--newton-iterations K] [--ref-iterations K] "
                              "[--kmax K] [--csv FILE | --out DIR] [--json-out FILE]\n");
         return 2;
     }
@@ -81,8 +83,12 @@ int main(int argc, char** argv) {
         else if (s == "--duration") opt.duration = number("--duration", value(), 0.001, 600);
         else if (s == "--settle-time") opt.settle_time = number("--settle-time", value(), 0, 600);
         else if (s == "--explicit-budget") opt.explicit_budget = number("--explicit-budget", value(), 0, 1e5);
+        else if (s == "--explicit-settle-budget")
+            opt.explicit_settle_budget = number("--explicit-settle-budget", value(), 0, 1e5);
         else if (s == "--explicit-short") opt.explicit_short = number("--explicit-short", value(), 1e-4, 600);
         else if (s == "--newton-max-n") opt.newton_max_n = static_cast<std::uint32_t>(number("--newton-max-n", value(), 0, 4096));
+        else if (s == "--newton-iterations")
+            opt.newton_iterations = static_cast<int>(number("--newton-iterations", value(), 1, 100000));
         else if (s == "--ref-iterations")
             opt.ref_iterations = static_cast<std::uint32_t>(number("--ref-iterations", value(), 1, 1000));
         else if (s == "--kmax") opt.kmax = static_cast<std::uint32_t>(number("--kmax", value(), 1, 1000));
