@@ -287,7 +287,7 @@ Equilibrium reference_equilibrium(const Simulation& settled, const Options& opt,
     std::vector<double> x = positions(sim);
     double moved = 0.0;
     int steps = 0;
-    for (; steps < 60; ++steps) {
+    for (; steps < 20; ++steps) {
         sim.step(1);
         std::vector<double> xn = positions(sim);
         moved = max_distance(xn, x);

@@ -27,9 +27,10 @@ struct Options {
     double explicit_budget = 60.0;         ///< --explicit-budget s of wall time an explicit run may take
     double explicit_settle_budget = 300.0; ///< --explicit-settle-budget s of wall time for the explicit settle run
     double explicit_short = 0.05;          ///< --explicit-short s simulated when the full run is over budget
-    std::uint32_t newton_max_n = 100;      ///< --newton-max-n: the Eigen reference up to this N, a long run above
+    std::uint32_t newton_max_n = 64;       ///< --newton-max-n: the static Eigen reference up to this N, a long run above
+    std::uint32_t newton_step_max_n = 100; ///< --newton-step-max-n: convergence's G* by Newton up to this N
     int newton_iterations = 100;           ///< --newton-iterations: at most this many Newton iterations per reference
-    std::uint32_t ref_iterations = 300;    ///< --ref-iterations of the long implicit reference run
+    std::uint32_t ref_iterations = 200;    ///< --ref-iterations of the long implicit reference run
     std::uint32_t kmax = 300;              ///< --kmax (convergence) most iterations plotted
     std::string json_out;                  ///< --json-out FILE: the JSON object also written there
     std::string csv;                       ///< --csv (convergence) file

@@ -9,12 +9,14 @@
 //                               (N = 316, 1000)
 // Options: --n N[,N..] (repeatable) grid sizes; --threads T (default 2); --json; --dt S implicit step (default
 // 1/30); --iterations K (default 30); --rho R Chebyshev (default 0.9, 0 = off); --strain-limit R implicit runs'
-// strain limit (default off); --duration S timed run (default 2); --settle-time S (default 10); --explicit-budget S
+// strain limit (default off); --duration S timed run (default 2); --settle-time S (default 10; 0 = no settled shape, no reference); --explicit-budget S
 // wall seconds an explicit run may take before it is timed over a short interval only (default 60);
 // --explicit-short S that interval (default 0.05); --explicit-settle-budget S wall seconds the explicit settle run
-// may take (default 300; over it the explicit settled shape is not measured); --newton-max-n N Eigen reference up to N (default 100);
+// may take (default 300; over it the explicit settled shape is not measured); --newton-max-n N static Eigen reference up to N (default 64: its sparse LDLT takes ~2.5 s per
+// iteration at N = 100 and the static problem 100s of iterations); --newton-step-max-n N convergence's G* by Newton
+// up to N (default 100);
 // --newton-iterations K at most K Newton iterations per reference equilibrium (default 100);
-// --ref-iterations K of the long-run reference (default 300); --kmax K (convergence, default 300); --csv FILE or
+// --ref-iterations K of the long-run reference (default 200, up to 20 steps of 0.1 s); --kmax K (convergence, default 300); --csv FILE or
 // --out DIR (convergence's CSV; default ./convergence.csv); --json-out FILE also writes the JSON object there.
 #include <cstdio>
 #include <cstdlib>
@@ -50,7 +52,7 @@ int main(int argc, char** argv) {
     if (argc < 2 || std::strcmp(argv[1], "--help") == 0) {
         std::fprintf(stderr, "usage: drape_implicit realtime|convergence|throughput [--n N,..] [--threads T] [--json] "
                              "[--dt S] [--iterations K] [--rho R] [--strain-limit R] [--duration S] [--settle-time S] "
-                             "[--explicit-budget S] [--explicit-settle-budget S] [--explicit-short S] [--newton-max-n N] [--newton-iterations K] [--ref-iterations K] "
+                             "[--explicit-budget S] [--explicit-settle-budget S] [--explicit-short S] [--newton-max-n N] [--newton-step-max-n N] [--newton-iterations K] [--ref-iterations K] "
                              "[--kmax K] [--csv FILE | --out DIR] [--json-out FILE]\n");
         return 2;
     }
@@ -87,6 +89,8 @@ int main(int argc, char** argv) {
             opt.explicit_settle_budget = number("--explicit-settle-budget", value(), 0, 1e5);
         else if (s == "--explicit-short") opt.explicit_short = number("--explicit-short", value(), 1e-4, 600);
         else if (s == "--newton-max-n") opt.newton_max_n = static_cast<std::uint32_t>(number("--newton-max-n", value(), 0, 4096));
+        else if (s == "--newton-step-max-n")
+            opt.newton_step_max_n = static_cast<std::uint32_t>(number("--newton-step-max-n", value(), 0, 4096));
         else if (s == "--newton-iterations")
             opt.newton_iterations = static_cast<int>(number("--newton-iterations", value(), 1, 100000));
         else if (s == "--ref-iterations")
