@@ -98,7 +98,7 @@ int cmd_convergence(const Options& opt) {
             g_star = std::min(g_star, gr);
             char buf[200];
             std::snprintf(buf, sizeof buf, "Eigen Newton reference from the best iterate: %d iterations, |grad G| = "
-                          "%.3g N%s", r.iterations, r.gradient_norm, r.converged ? "" : " (not converged: rounding floor)");
+                          "%.3g N%s", r.iterations, r.gradient_norm, r.converged ? "" : " (not converged: G* may lie above the minimum, the errors are then understated)");
             star_method = buf;
         } else {
             Simulation sim = start;
