@@ -78,15 +78,30 @@ int main(int argc, char** argv) {
         ->check(in_range<std::uint32_t>(drape::hang_min_n, drape::hang_max_n));
     cmd->add_option("--threads", run.threads, "Worker threads (default: all hardware threads)")
         ->check(in_range<int>(1, 256));
-    auto* steps = cmd->add_option("--steps", run.steps, "Substeps (integration steps of size dt) to run [default 1000]")
+    auto* steps = cmd->add_option("--steps", run.steps,
+                                  "Steps of size dt to run (explicit substeps or implicit steps) [default 1000]")
                       ->check(in_range<std::uint64_t>(1, 1'000'000'000));
     auto* secs = cmd->add_option("--sim-seconds", run.sim_seconds, "Simulated seconds to run (instead of --steps)")
                      ->check(in_range<double>(1e-6, 1e4, " s"));
     steps->excludes(secs);
-    cmd->add_option("--dt", run.dt, "Substep in seconds (default: 0.9 x the explicit stability bound)")
+    cmd->add_option("--dt", run.dt,
+                    "Explicit substep or implicit step in seconds (default: explicit 0.9 x the stability bound, "
+                    "above it refused; implicit a frame, 1/30 s, any step up to 0.1 s)")
         ->check(in_range<double>(1e-9, 0.1, " s"));
-    cmd->add_option("--integrator", run.integrator, "Time integrator: euler or verlet [default: the scene's]")
+    cmd->add_option("--integrator", run.integrator,
+                    "Time integrator of the explicit solver: euler or verlet [default: the scene's]")
         ->check(CLI::IsMember({"euler", "verlet"}));
+    cmd->add_option("--solver", run.solver,
+                    "explicit (the seeds' substeps below the stability bound) or implicit (backward Euler by vertex "
+                    "block descent, steps as long as a frame) [default: the scene's]")
+        ->check(CLI::IsMember({"explicit", "implicit"}));
+    cmd->add_option("--iterations", run.iterations,
+                    "Implicit solver: iterations (sweeps) per step, the most with --tolerance [scene's, 30]")
+        ->check(in_range<std::uint32_t>(1, 1000));
+    cmd->add_option("--tolerance", run.tolerance,
+                    "Implicit solver: stop a step once its residual is below this fraction of the first sweep's "
+                    "(0 = always run --iterations) [scene's, 0]")
+        ->check(in_range<float>(0.0f, 1.0f));
     cmd->add_option("--material", run.material,
                     "Material: a fabric preset (silk, cotton_shirting, jersey, linen, wool, denim, ...; see drape "
                     "materials), switching the cloth to the fabric model, or springs (the seeds' spring model with "
@@ -147,6 +162,20 @@ int main(int argc, char** argv) {
     view_cmd->add_option("--substeps", view.substeps,
                          "Substeps per frame (default: automatic, 1/60 s simulated per frame within a cost cap)")
         ->check(in_range<int>(1, 1000));
+    view_cmd->add_option("--solver", view.solver,
+                         "explicit or implicit (one implicit step per frame, iterations within a time budget) "
+                         "[default: the scene's]")
+        ->check(CLI::IsMember({"explicit", "implicit"}));
+    view_cmd->add_option("--iterations", view.iterations,
+                         "Implicit solver: the most iterations per step (the frame budget may run fewer) [scene's, 30]")
+        ->check(in_range<std::uint32_t>(1, 1000));
+    view_cmd->add_option("--tolerance", view.tolerance,
+                         "Implicit solver: stop a step once its residual is below this fraction of the first sweep's")
+        ->check(in_range<float>(0.0f, 1.0f));
+    view_cmd->add_option("--dt", view.dt,
+                         "Implicit solver: the step in seconds [1/60 s, a frame at 60 FPS]; explicit: the substep, "
+                         "at most the stability bound [default 0.9 x the bound]")
+        ->check(in_range<double>(1e-4, 0.1, " s"));
     view_cmd->add_option("--width", view.width, "Window width in pixels")
         ->check(in_range<int>(320, 7680))
         ->capture_default_str();

@@ -141,4 +141,29 @@ void apply_material_flag(SceneSpec& spec, const std::string& name) {
     spec.fabric = *f;
 }
 
+void apply_solver_flags(SceneSpec& spec, const SolverFlags& f) {
+    if (f.solver) {
+        if (*f.solver != "explicit" && *f.solver != "implicit")
+            throw InvalidInput("--solver: '" + *f.solver + "' is not a solver (explicit or implicit)");
+        spec.physics.solver = *f.solver == "implicit" ? Solver::implicit : Solver::explicit_euler;
+    }
+    const bool implicit = spec.physics.solver == Solver::implicit;
+    const std::string whose = f.solver ? " (--solver)" : " (the scene's physics.solver)";
+    if (f.integrator) {
+        if (*f.integrator == "verlet" && implicit)
+            throw InvalidInput("--integrator: verlet is a choice of the explicit solver only, but the solver is "
+                               "implicit" + whose + "; the implicit solver keeps velocities (use euler)");
+        spec.physics.integrator = *f.integrator == "verlet" ? Integrator::verlet : Integrator::symplectic_euler;
+    } else if (implicit) {
+        spec.physics.integrator = Integrator::symplectic_euler; // a Verlet scene run with --solver implicit
+    }
+    for (const auto& [given, flag] : {std::pair{f.iterations.has_value(), "--iterations"},
+                                      {f.tolerance.has_value(), "--tolerance"}})
+        if (given && !implicit)
+            throw InvalidInput(std::string(flag) + ": a flag of the implicit solver, but the solver is explicit" + whose +
+                               "; add --solver implicit");
+    if (f.iterations) spec.physics.implicit.iterations = *f.iterations;
+    if (f.tolerance) spec.physics.implicit.tolerance = *f.tolerance;
+}
+
 } // namespace drape::app

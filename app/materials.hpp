@@ -3,6 +3,8 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -37,5 +39,17 @@ int materials_command(bool json);
 /// Applies `drape run --material NAME` to a scene: a preset switches it to the fabric model with that fabric;
 /// "springs" to the seeds' spring model with the scene's spring fields. Throws InvalidInput listing the valid names.
 void apply_material_flag(SceneSpec& spec, const std::string& name);
+
+/// The solver flags of `drape run` and `drape view` (unset: the scene's).
+struct SolverFlags {
+    std::optional<std::string> solver;       ///< --solver explicit|implicit
+    std::optional<std::uint32_t> iterations; ///< --iterations K, 1..1000
+    std::optional<float> tolerance;          ///< --tolerance T, 0..1
+    std::optional<std::string> integrator;   ///< --integrator euler|verlet
+};
+/// Applies them to a scene: --solver implicit switches a Verlet scene to the Euler integrator (the implicit solver
+/// keeps velocities); throws InvalidInput (exit code 2) naming the flag for --integrator verlet with the implicit
+/// solver, and for --iterations or --tolerance when the solver (the flag's or the scene's) is explicit.
+void apply_solver_flags(SceneSpec& spec, const SolverFlags& flags);
 
 } // namespace drape::app

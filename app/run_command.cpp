@@ -36,7 +36,7 @@ std::string hex64(std::uint64_t v) {
 /// Progress on stderr, only when it is a terminal and the run has lasted over 2 s.
 class Progress {
   public:
-    explicit Progress(std::uint64_t total) : total_(total), tty_(isatty(STDERR_FILENO) != 0) {
+    Progress(std::uint64_t total, const char* unit) : total_(total), unit_(unit), tty_(isatty(STDERR_FILENO) != 0) {
         // DRAPE_PROGRESS_AFTER: seconds before the first report (default 2; tests use 0).
         if (const char* after = std::getenv("DRAPE_PROGRESS_AFTER")) delay_ = std::atof(after);
     }
@@ -46,7 +46,7 @@ class Progress {
         if (elapsed < delay_ || (shown_ && elapsed - last_ < 0.25)) return;
         last_ = elapsed;
         const double left = done ? elapsed * double(total_ - done) / double(done) : 0.0;
-        std::fprintf(stderr, "\rdrape: substep %llu/%llu (%3.0f%%), %.1f s elapsed, ~%.1f s left   ",
+        std::fprintf(stderr, "\rdrape: %s %llu/%llu (%3.0f%%), %.1f s elapsed, ~%.1f s left   ", unit_,
                      static_cast<unsigned long long>(done), static_cast<unsigned long long>(total_),
                      100.0 * double(done) / double(total_), elapsed, left);
         shown_ = true;
@@ -60,6 +60,7 @@ class Progress {
 
   private:
     std::uint64_t total_;
+    const char* unit_;
     bool tty_;
     bool shown_ = false;
     double last_ = 0.0;
@@ -115,7 +116,8 @@ int run_command(const RunOptions& o) {
     if (o.stiffness) spec.stiffness = *o.stiffness;
     if (o.damping) spec.damping_ratio = *o.damping;
     if (o.drag) spec.physics.air_drag = *o.drag;
-    if (o.integrator) spec.physics.integrator = *o.integrator == "verlet" ? Integrator::verlet : Integrator::symplectic_euler;
+    apply_solver_flags(spec, {o.solver, o.iterations, o.tolerance, o.integrator});
+    const bool implicit = spec.physics.solver == Solver::implicit;
     if (o.wind) spec.physics.wind.enabled = true;
     if (o.aero) spec.physics.aero.enabled = true;
     if (o.wind_strength) spec.physics.wind.strength = *o.wind_strength;
@@ -136,15 +138,16 @@ int run_command(const RunOptions& o) {
     SimulationParams sp = scene.params;
     const StabilityBound bound = stability_bound(scene.cloth, sp);
     const bool dt_default = !spec.dt.has_value();
-    // A dt above the bound: the message names where it came from (the flag, or the scene file's field).
-    if (!dt_default) check_stability(scene.cloth, sp, o.dt ? std::string("--dt") : spec.source + ": physics.dt");
+    // A dt above the bound: the message names where it came from (the flag, or the scene file's field). The implicit
+    // solver takes any step up to 0.1 s.
+    if (!dt_default && !implicit) check_stability(scene.cloth, sp, o.dt ? std::string("--dt") : spec.source + ": physics.dt");
 
     std::uint64_t steps = 1000;
     if (o.steps) steps = *o.steps;
     if (o.sim_seconds) steps = static_cast<std::uint64_t>(std::ceil(*o.sim_seconds / double(sp.dt)));
     if (steps > 1'000'000'000ull)
         throw InvalidInput("--sim-seconds " + std::to_string(*o.sim_seconds) + " at dt = " + std::to_string(sp.dt) +
-                           " s needs " + std::to_string(steps) + " substeps (max 1e9)");
+                           " s needs " + std::to_string(steps) + (implicit ? " steps" : " substeps") + " (max 1e9)");
 
     std::optional<Simulation> built;
     workers.run([&] { built.emplace(std::move(scene.cloth), scene.initial, sp); });
@@ -158,12 +161,13 @@ int run_command(const RunOptions& o) {
     }
 
     std::string error, blow_up;
-    Progress progress(steps);
+    Progress progress(steps, implicit ? "step" : "substep");
     const auto start = clock_type::now();
     try {
-        // Chunks of ~1e7 particle-substeps keep progress reports cheap and responsive.
+        // Chunks of ~1e7 particle-substeps (an implicit step: ~1e6 particle-steps, each many sweeps) keep progress
+        // reports cheap and responsive.
         const std::uint64_t chunk =
-            exporter ? o.export_every : std::max<std::uint64_t>(1, 10'000'000 / particles);
+            exporter ? o.export_every : std::max<std::uint64_t>(1, (implicit ? 1'000'000 : 10'000'000) / particles);
         workers.run([&] {
             for (std::uint64_t done = 0; done < steps;) {
                 const std::uint64_t n = std::min(chunk, steps - done);
@@ -183,6 +187,7 @@ int run_command(const RunOptions& o) {
     const Health health = workers.run([&] { return sim.health(); });
     const std::uint64_t done = sim.steps_done();
     const double rate = wall > 0.0 ? double(particles) * double(done) / wall : 0.0;
+    const double real_time = wall > 0.0 ? sim.time() / wall : 0.0; // simulated seconds per wall second
 
     nlohmann::ordered_json j;
     j["scene"] = spec.name;
@@ -201,12 +206,26 @@ int run_command(const RunOptions& o) {
     j["springs"] = sim.cloth().spring_count();
     j["threads"] = threads;
     j["hardware_threads"] = hardware;
-    j["substeps"] = done;
+    j["solver"] = solver_name(sp.solver);
+    j["substeps"] = done; // explicit substeps or implicit steps (also "steps")
+    j["steps"] = done;
     j["dt"] = sp.dt;
-    j["dt_max"] = bound.dt_max;
-    j["dt_source"] = dt_default ? "default: 0.9 x stability bound" : o.dt ? "--dt" : "scene: physics.dt";
+    j["dt_max"] = bound.dt_max; // the explicit stability bound (the implicit step may exceed it)
+    j["dt_source"] = !dt_default ? (o.dt ? "--dt" : "scene: physics.dt")
+                     : implicit  ? "default: a frame (1/30 s)"
+                                 : "default: 0.9 x stability bound";
     j["sim_seconds"] = sim.time();
+    j["real_time_factor"] = real_time;
     j["integrator"] = integrator_name(sp.integrator);
+    if (implicit) {
+        const ImplicitStats& st = sim.implicit_stats();
+        j["implicit"] = {{"iterations", st.iterations}, // the last step's
+                         {"relative_residual", st.relative_residual},
+                         {"max_iterations", sp.implicit.iterations},
+                         {"tolerance", sp.implicit.tolerance},
+                         {"chebyshev_rho", sp.implicit.chebyshev_rho},
+                         {"method", sp.implicit.method == ImplicitMethod::jacobi ? "jacobi" : "gauss_seidel"}};
+    }
     j["kernel"] = kernel_path_name(sim.kernel());
     j["fused"] = sp.fused;
     if (spec.model == MaterialModel::springs) j["stiffness"] = spec.stiffness;
@@ -251,10 +270,27 @@ int run_command(const RunOptions& o) {
         std::printf("drape run: scene %s, %zu particles, %zu springs, %d thread(s), kernel %s%s\n",
                     spec.name.c_str(), particles, sim.cloth().spring_count(), threads,
                     kernel_path_name(sim.kernel()), sp.fused ? " (fused)" : " (staged)");
-        std::printf("  integrator %s, dt %s s (%s; bound %s s), %llu substeps = %.4g s simulated\n",
-                    integrator_name(sp.integrator), format_dt(sp.dt).c_str(),
-                    dt_default ? "default" : o.dt ? "--dt" : "scene's physics.dt", format_dt(bound.dt_max).c_str(),
-                    static_cast<unsigned long long>(done), sim.time());
+        if (implicit) {
+            const ImplicitStats& st = sim.implicit_stats();
+            std::printf("  solver implicit (backward Euler, %s%s), dt %s s (%s; %.3g x the explicit bound %s s), "
+                        "%llu steps = %.4g s simulated\n",
+                        sp.implicit.method == ImplicitMethod::jacobi ? "Jacobi" : "vertex block descent",
+                        sp.implicit.chebyshev_rho > 0.0f
+                            ? (", Chebyshev rho " + format_dt(sp.implicit.chebyshev_rho)).c_str()
+                            : "",
+                        format_dt(sp.dt).c_str(), dt_default ? "default: a frame" : o.dt ? "--dt" : "scene's physics.dt",
+                        double(sp.dt) / bound.dt_max, format_dt(bound.dt_max).c_str(),
+                        static_cast<unsigned long long>(done), sim.time());
+            std::printf("  last step: %u iterations (at most %u%s), relative residual %.3g\n", st.iterations,
+                        sp.implicit.iterations,
+                        sp.implicit.tolerance > 0.0f ? (", tolerance " + format_dt(sp.implicit.tolerance)).c_str() : "",
+                        st.relative_residual);
+        } else {
+            std::printf("  solver explicit, integrator %s, dt %s s (%s; bound %s s), %llu substeps = %.4g s simulated\n",
+                        integrator_name(sp.integrator), format_dt(sp.dt).c_str(),
+                        dt_default ? "default" : o.dt ? "--dt" : "scene's physics.dt", format_dt(bound.dt_max).c_str(),
+                        static_cast<unsigned long long>(done), sim.time());
+        }
         const DerivedMaterial d = derive_material(sim.cloth());
         if (spec.model == MaterialModel::fabric)
             std::printf("  material: fabric '%s' (%.4g g/m^2); derived node mass %.4g g, spring k structural "
@@ -265,7 +301,8 @@ int run_command(const RunOptions& o) {
         else
             std::printf("  material: springs, node mass %.4g g, spring k structural %.4g, shear %.4g, bend %.4g N/m\n",
                         d.node_mass_g_mean, double(d.stiffness[0]), double(d.stiffness[1]), double(d.stiffness[2]));
-        std::printf("  wall %.3f s, %.4g particle-substeps/s\n", wall, rate);
+        std::printf("  wall %.3f s, %.4g particle-%s/s, %.3gx real time\n", wall, rate, implicit ? "steps" : "substeps",
+                    real_time);
         std::printf("  max structural strain %.4f, kinetic energy %.4g J, finite %s, checksum %s\n",
                     double(health.max_structural_strain), health.kinetic_energy,
                     (health.finite && error.empty()) ? "yes" : "no", hex64(sim.checksum()).c_str());

@@ -16,6 +16,9 @@ struct RunOptions {
     std::optional<double> sim_seconds;
     std::optional<double> dt;
     std::optional<std::string> integrator;
+    std::optional<std::string> solver;       ///< explicit | implicit
+    std::optional<std::uint32_t> iterations; ///< implicit solver: sweeps per step
+    std::optional<float> tolerance;          ///< implicit solver: relative residual to stop a step early
     /// A fabric preset (switches the scene to the fabric model) or "springs" (the seeds' spring model).
     std::optional<std::string> material;
     std::optional<float> stiffness;

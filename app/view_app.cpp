@@ -76,7 +76,9 @@ double median(std::vector<double> v) {
 Viewer::Viewer(const ViewOptions& options) : options_(options) {
     // The scene first: a bad --scene or --size is reported before any window opens.
     session_ = std::make_unique<ViewSession>(options.scene, options.size, options.threads, options.substeps,
-                                             options.material);
+                                             options.material,
+                                             SolverFlags{options.solver, options.iterations, options.tolerance, {}},
+                                             options.dt);
     show_ui_ = options.ui;
     scripted_mouse = options.demo_grab;
     full_mesh_ = options.full_mesh;
@@ -700,6 +702,19 @@ void Viewer::print_stats_json() const {
     j["frames_measured"] = frame.size();
     j["dt"] = s.params().dt;
     j["sim_seconds"] = s.time();
+    // Simulated seconds per wall second at the median frame (the overlay's figure).
+    j["real_time_factor"] =
+        frame_ms > 0.0 ? double(session_->substeps()) * double(s.params().dt) / (frame_ms * 1e-3) : 0.0;
+    j["solver"] = solver_name(s.params().solver);
+    if (s.params().solver == Solver::implicit)
+        j["implicit"] = {{"iterations", s.params().implicit.iterations}, // running now (the budget's)
+                         {"max_iterations", session_->max_iterations()},
+                         {"last_step_iterations", s.implicit_stats().iterations},
+                         {"relative_residual", s.implicit_stats().relative_residual},
+                         {"chebyshev_rho", s.params().implicit.chebyshev_rho},
+                         {"tolerance", s.params().implicit.tolerance},
+                         {"budget", session_->iteration_budget()},
+                         {"budget_ms", session_->sim_budget_ms()}};
     j["max_strain"] = last_publish_.max_structural_strain;
     j["finite"] = last_publish_.finite && session_->error().empty();
     j["camera"] = {{"yaw", camera_.yaw}, {"pitch", camera_.pitch}, {"distance", camera_.distance}};

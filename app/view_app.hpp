@@ -81,6 +81,7 @@ class Viewer {
     void ui_fabric_looks();    ///< colours, shading, strain colours
     void ui_physics();
     void ui_aero();
+    void ui_solver();
     void ui_lighting();
     void ui_camera();
     void ui_overlay();

@@ -16,6 +16,10 @@ struct ViewOptions {
                                        ///< empty: the scene's own, 64 for "hang"
     int threads = 0;             ///< 0 = all hardware threads
     std::optional<int> substeps; ///< per frame; empty = automatic (real time up to a cost cap)
+    std::optional<std::string> solver;       ///< explicit | implicit (empty: the scene's)
+    std::optional<std::uint32_t> iterations; ///< implicit: the most iterations per step
+    std::optional<float> tolerance;          ///< implicit: relative residual that ends a step early
+    std::optional<double> dt;                ///< the implicit step, or the explicit substep (empty: automatic)
     int width = 1280;            ///< window, screen coordinates
     int height = 800;
     bool vsync = true;

@@ -59,6 +59,33 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
 
 } // namespace
 
+int implicit_auto_steps(double dt) {
+    const double want = std::round(view_frame_seconds / std::max(dt, 1e-9));
+    return static_cast<int>(std::clamp(want, 1.0, double(view_implicit_max_auto_steps)));
+}
+
+std::uint32_t budget_iterations(double sim_ms, double budget_ms, std::uint32_t current, std::uint32_t ran,
+                                std::uint32_t cap) {
+    cap = std::max<std::uint32_t>(cap, 1);
+    const std::uint32_t floor = std::min(view_min_iterations, cap);
+    current = std::clamp(current, floor, cap);
+    if (!(sim_ms > 0.0) || !(budget_ms > 0.0)) return current;
+    // The cost of a frame is about proportional to the iterations its steps ran (a tolerance may stop them early).
+    const double base = double(std::clamp<std::uint32_t>(ran == 0 ? current : ran, 1, current));
+    if (sim_ms > budget_ms) {
+        const double fit = std::floor(base * budget_ms / sim_ms);
+        const std::uint32_t lower = current > floor ? current - 1 : floor;
+        return std::clamp(static_cast<std::uint32_t>(std::min(fit, double(lower))), floor, cap);
+    }
+    if (sim_ms < 0.75 * budget_ms && current < cap) {
+        const double fit = std::floor(base * 0.9 * budget_ms / sim_ms);
+        const double step = std::max(1.0, std::floor(0.25 * double(current)));
+        const double up = std::min(fit, double(current) + step);
+        return std::clamp(static_cast<std::uint32_t>(std::max(up, double(current) + 1.0)), floor, cap);
+    }
+    return current;
+}
+
 std::string grouped(std::size_t n) {
     const std::string digits = std::to_string(n);
     std::string out;
@@ -79,7 +106,8 @@ bool same_figures(const Fabric& a, const Fabric& b) noexcept {
 }
 
 ViewSession::ViewSession(const std::string& scene, std::optional<std::uint32_t> size, int threads,
-                         std::optional<int> substeps, const std::optional<std::string>& material) {
+                         std::optional<int> substeps, const std::optional<std::string>& material,
+                         const SolverFlags& solver, std::optional<double> dt) {
     SceneSpec spec;
     try {
         spec = load_scene(scene);
@@ -87,6 +115,8 @@ ViewSession::ViewSession(const std::string& scene, std::optional<std::uint32_t> 
         throw InvalidInput(std::string("--scene: ") + e.what());
     }
     if (material) apply_material_flag(spec, *material);
+    apply_solver_flags(spec, solver);
+    if (dt) spec.dt = static_cast<float>(*dt);
     try {
         workers_ = std::make_unique<Workers>(threads);
     } catch (const InvalidInput& e) {
@@ -107,6 +137,10 @@ ViewSession::ViewSession(const std::string& scene, std::optional<std::uint32_t> 
     r.history = History::none;
     install(build(r.target, nullptr, false), r);
     message_ = {};
+    // An explicit --dt the cloth cannot take is refused (build() would quietly lower it).
+    if (dt && params_.solver == Solver::explicit_euler && *dt > dt_bound_)
+        throw InvalidInput("--dt: value " + fmt(*dt) + " s is above this cloth's explicit stability bound " +
+                           fmt(dt_bound_) + " s (lower it, or use --solver implicit)");
 }
 
 ViewSession::~ViewSession() {
@@ -148,8 +182,14 @@ ViewSession::Snapshot ViewSession::settings_for(SceneSpec spec, std::optional<st
     // Node mass: the scene's total over its particles (set exactly in build(), once the count is known).
     t.fabric.node_mass_g = 1000.0f * t.total_mass / float(std::max<std::size_t>(1, scene_particle_count(spec)));
     t.params = spec.physics;
-    t.params.dt = spec.dt ? *spec.dt : 0.0f;
-    t.auto_dt = !spec.dt.has_value();
+    // The scene's dt is the implicit step or the explicit substep, whichever solver it runs; the other one's is
+    // automatic.
+    const bool implicit = spec.physics.solver == Solver::implicit;
+    t.implicit_dt = implicit && spec.dt ? double(*spec.dt) : view_implicit_dt;
+    t.explicit_dt = 0.0;
+    t.params.dt = implicit ? static_cast<float>(t.implicit_dt) : spec.dt ? *spec.dt : 0.0f;
+    t.auto_dt = implicit || !spec.dt.has_value();
+    t.max_iterations = spec.physics.implicit.iterations;
     t.spec = std::move(spec);
     t.topology = ++topology_counter_;
     return t;
@@ -208,6 +248,7 @@ double ViewSession::bound_for(const FabricSettings& f, float air_drag, const Aer
 }
 
 int ViewSession::auto_substep_count(double dt) const {
+    if (params_.solver == Solver::implicit) return implicit_auto_steps(dt);
     return auto_substeps_for(particle_count(), dt);
 }
 
@@ -328,7 +369,10 @@ ViewSession::Built ViewSession::build(Snapshot t, const KeepState* keep_state, b
     // Run parameters: the user's (kept across rebuilds), the scene's colliders.
     t.params.colliders = scene.params.colliders;
     t.dt_bound = stability_bound(cloth, t.params).dt_max;
-    if (t.auto_dt || !(t.params.dt > 0.0f) || t.params.dt > t.dt_bound)
+    const bool implicit = t.params.solver == Solver::implicit;
+    if (implicit) // any step: the implicit solver has no stability bound
+        t.params.dt = static_cast<float>(t.implicit_dt);
+    else if (t.auto_dt || !(t.params.dt > 0.0f) || t.params.dt > t.dt_bound)
         t.params.dt = static_cast<float>(0.9 * t.dt_bound);
     // The new simulation is complete before it replaces the old one: if anything throws, the old one stays.
     const bool keep = keep_state && keep_state->state.x.size() == cloth.particle_count;
@@ -339,7 +383,7 @@ ViewSession::Built ViewSession::build(Snapshot t, const KeepState* keep_state, b
         out.sim->set_pinned(i, true);
     out.publisher = std::make_unique<Publisher>(out.sim->cloth());
     if (t.auto_substeps)
-        t.substeps = auto_substeps_for(particles, t.params.dt);
+        t.substeps = implicit ? implicit_auto_steps(t.params.dt) : auto_substeps_for(particles, t.params.dt);
     else if (!keep_frame_time)
         t.frame_time = double(t.substeps) * double(t.params.dt);
     out.snap = std::move(t);
@@ -392,8 +436,10 @@ std::size_t ViewSession::advance() {
     if (job_ && job_->request.keep) return 0;
     step_pending_ = false;
     const std::size_t before = sim_->steps_done();
+    const auto start = std::chrono::steady_clock::now();
     try {
         workers_->run([&] { sim_->step(static_cast<std::size_t>(substeps_)); });
+        if (params_.solver == Solver::implicit) note_frame_sim_ms(1e3 * seconds_since(start));
     } catch (const SimulationError& e) {
         running_ = false;
         error_ = e.what();
@@ -441,7 +487,7 @@ void ViewSession::reset() {
 ViewSession::Snapshot ViewSession::snapshot() const {
     return {size_,   spec_,   total_mass_, fabric_,   has_seams_, cloth_size_, frame_lo_,      frame_hi_,
             ground_, params_, auto_dt_,    dt_bound_, substeps_,  spacing_,    frame_time_, auto_substeps_,
-            topology_};
+            topology_, implicit_dt_, explicit_dt_, max_iterations_, budget_on_, budget_ms_};
 }
 
 void ViewSession::restore(const Snapshot& b) {
@@ -462,6 +508,13 @@ void ViewSession::restore(const Snapshot& b) {
     spacing_ = b.spacing;
     auto_substeps_ = b.auto_substeps;
     topology_ = b.topology;
+    implicit_dt_ = b.implicit_dt;
+    explicit_dt_ = b.explicit_dt;
+    max_iterations_ = b.max_iterations;
+    budget_on_ = b.budget_on;
+    budget_ms_ = b.budget_ms;
+    budget_sum_ms_ = 0.0;
+    budget_frames_ = 0;
 }
 
 bool ViewSession::busy(const std::string& what) {
@@ -704,10 +757,13 @@ bool ViewSession::apply_physics(const Candidate& next, const std::string& what, 
     const Snapshot before = snapshot();
     const double bound = bound_for(next.fabric, next.air_drag, next.aero);
     const double old_dt = sim_->params().dt;
+    const bool implicit = params_.solver == Solver::implicit;
     double new_dt = old_dt;
-    if (auto_dt_ || old_dt > bound) new_dt = 0.9 * bound;
+    if (!implicit && (auto_dt_ || old_dt > bound)) new_dt = 0.9 * bound; // the implicit step stays
     int new_substeps = substeps_;
-    if (auto_substeps_) {
+    if (implicit) {
+        // Steps per frame unchanged.
+    } else if (auto_substeps_) {
         new_substeps = auto_substep_count(new_dt);
     } else {
         // Keep the simulated time per frame the user chose (substeps x dt when they last set either), in both
@@ -835,9 +891,10 @@ void ViewSession::set_node_mass(float grams) {
     next.node_mass_g = grams;
     const double bound = bound_for(next, params_.air_drag, params_.aero);
     const double old_dt = sim_->params().dt;
-    double new_dt = (auto_dt_ || old_dt > bound) ? 0.9 * bound : old_dt;
+    const bool implicit = params_.solver == Solver::implicit;
+    double new_dt = !implicit && (auto_dt_ || old_dt > bound) ? 0.9 * bound : old_dt;
     int new_substeps = substeps_;
-    if (!auto_substeps_) {
+    if (!auto_substeps_ && !implicit) {
         new_substeps = manual_substep_count(new_dt);
         if (new_substeps > view_max_substeps) {
             post(MessageLevel::warning, "refused: node mass " + fmt(grams) + " g needs dt <= " + fmt(bound) +
@@ -934,6 +991,112 @@ void ViewSession::set_integrator(Integrator integrator) {
     post(MessageLevel::info, std::string("integrator: ") + integrator_name(integrator));
 }
 
+void ViewSession::set_solver(Solver solver) {
+    if (solver == params_.solver || busy("solver")) return;
+    const Snapshot before = snapshot();
+    SimulationParams p = sim_->params();
+    const double saved_explicit_dt = explicit_dt_;
+    if (solver == Solver::implicit) {
+        if (!auto_dt_) explicit_dt_ = p.dt;
+        p.solver = Solver::implicit;
+        p.integrator = Integrator::symplectic_euler; // the implicit solver keeps velocities
+        p.dt = static_cast<float>(implicit_dt_);
+    } else {
+        p.solver = Solver::explicit_euler;
+        const double top = dt_bound_ * (1.0 - 1e-6);
+        p.dt = static_cast<float>(auto_dt_ || !(explicit_dt_ > 0.0) ? 0.9 * dt_bound_ : std::min(explicit_dt_, top));
+    }
+    p.implicit.iterations = max_iterations_;
+    // The pace: automatic steps, or the simulated time per frame the user chose.
+    const int steps = auto_substeps_ ? (solver == Solver::implicit ? implicit_auto_steps(p.dt)
+                                                                   : auto_substeps_for(particle_count(), p.dt))
+                                     : manual_substep_count(p.dt);
+    if (steps > view_max_substeps) {
+        post(MessageLevel::warning, "refused: the explicit solver needs " + std::to_string(steps) +
+                                        " substeps per frame to keep the pace (max " +
+                                        std::to_string(view_max_substeps) + "); choose automatic substeps first");
+        return;
+    }
+    if (!try_set_params(p)) {
+        explicit_dt_ = saved_explicit_dt;
+        return;
+    }
+    substeps_ = steps;
+    budget_sum_ms_ = 0.0;
+    budget_frames_ = 0;
+    record(before, "solver");
+    if (solver == Solver::implicit)
+        post(MessageLevel::info, "solver implicit: " + std::to_string(substeps_) + " step(s) of " + fmt(p.dt) +
+                                     " s per frame, up to " + std::to_string(max_iterations_) + " iterations each" +
+                                     (budget_on_ ? " (fewer when a frame's simulation takes over " + fmt(budget_ms_) +
+                                                       " ms)"
+                                                 : ""));
+    else
+        post(MessageLevel::info, "solver explicit: dt " + fmt(p.dt) + " s (bound " + fmt(dt_bound_) + " s), " +
+                                     std::to_string(substeps_) + " substeps per frame");
+}
+
+void ViewSession::set_running_iterations(std::uint32_t iterations) {
+    SimulationParams p = sim_->params();
+    if (p.implicit.iterations == iterations) return;
+    p.implicit.iterations = iterations;
+    try {
+        sim_->set_params(p);
+    } catch (const InvalidInput& e) { // cannot happen (1..1000)
+        post(MessageLevel::warning, std::string("refused: ") + e.what());
+        return;
+    }
+    params_ = p;
+}
+
+void ViewSession::set_max_iterations(std::uint32_t iterations) {
+    iterations = std::clamp<std::uint32_t>(iterations, 1, 1000);
+    if (iterations == max_iterations_) return;
+    SimulationParams p = sim_->params();
+    p.implicit.iterations = iterations; // the budget starts from the new cap
+    if (!commit_params(p, "iterations")) return; // its undo entry holds the old cap
+    max_iterations_ = iterations;
+    budget_sum_ms_ = 0.0;
+    budget_frames_ = 0;
+}
+
+void ViewSession::set_chebyshev_rho(float rho) {
+    SimulationParams p = sim_->params();
+    p.implicit.chebyshev_rho = std::clamp(rho, 0.0f, 0.99f);
+    commit_params(p, "chebyshev rho");
+}
+
+void ViewSession::set_iteration_budget(bool on) {
+    if (on == budget_on_ || busy("iteration budget")) return;
+    const Snapshot before = snapshot();
+    budget_on_ = on;
+    budget_sum_ms_ = 0.0;
+    budget_frames_ = 0;
+    if (!on) set_running_iterations(max_iterations_);
+    record(before, "iteration budget");
+}
+
+void ViewSession::set_sim_budget_ms(double ms) {
+    if (busy("iteration budget")) return;
+    const Snapshot before = snapshot();
+    budget_ms_ = std::clamp(ms, 1.0, 1000.0);
+    budget_sum_ms_ = 0.0;
+    budget_frames_ = 0;
+    record(before, "budget ms");
+}
+
+void ViewSession::note_frame_sim_ms(double ms) {
+    if (params_.solver != Solver::implicit || !budget_on_ || !(ms >= 0.0)) return;
+    budget_sum_ms_ += ms;
+    if (++budget_frames_ < view_budget_frames) return;
+    const double mean = budget_sum_ms_ / budget_frames_;
+    budget_sum_ms_ = 0.0;
+    budget_frames_ = 0;
+    const std::uint32_t current = sim_->params().implicit.iterations;
+    set_running_iterations(
+        budget_iterations(mean, budget_ms_, current, sim_->implicit_stats().iterations, max_iterations_));
+}
+
 void ViewSession::set_strain_limit(const StrainLimit& limit) {
     SimulationParams p = sim_->params();
     p.strain_limit.ratio = std::clamp(limit.ratio, 0.0f, 10.0f);
@@ -943,6 +1106,17 @@ void ViewSession::set_strain_limit(const StrainLimit& limit) {
 }
 
 bool ViewSession::apply_dt(double dt) {
+    if (params_.solver == Solver::implicit) { // any step in the slider's range
+        SimulationParams p = sim_->params();
+        p.dt = static_cast<float>(std::clamp(dt, view_implicit_min_dt, view_implicit_max_dt));
+        if (!try_set_params(p)) return false;
+        implicit_dt_ = p.dt;
+        if (auto_substeps_)
+            substeps_ = auto_substep_count(p.dt);
+        else
+            frame_time_ = double(substeps_) * double(p.dt);
+        return true;
+    }
     // The top of the slider is the bound itself: keep the float dt just below it (rounding to float, and the
     // probe bound against the core's own, may differ in the last bits).
     const double top = dt_bound_ * (1.0 - 1e-6);
@@ -962,14 +1136,15 @@ void ViewSession::set_dt(double dt) {
     if (busy("dt")) return;
     const Snapshot before = snapshot();
     if (!apply_dt(dt)) return;
-    auto_dt_ = false;
+    if (params_.solver == Solver::explicit_euler) auto_dt_ = false; // the implicit step is always the user's
     record(before, "dt");
 }
 
 void ViewSession::set_auto_dt(bool on) {
     if (busy("auto dt")) return;
     const Snapshot before = snapshot();
-    if (on && !apply_dt(0.9 * dt_bound_)) return;
+    // With the implicit solver the flag waits for the switch back to explicit.
+    if (on && params_.solver == Solver::explicit_euler && !apply_dt(0.9 * dt_bound_)) return;
     auto_dt_ = on;
     record(before, "auto dt");
 }
@@ -1152,7 +1327,11 @@ SceneSpec ViewSession::current_spec() const {
     const std::vector<Collider> colliders = spec_.physics.colliders; // the scene's own (a body is spec.body)
     spec.physics = params_;
     spec.physics.colliders = colliders;
-    spec.dt = auto_dt_ ? std::nullopt : std::optional<float>(params_.dt);
+    spec.physics.implicit.iterations = max_iterations_; // the user's, not the budget's of the moment
+    // The implicit step is always written (the viewer's default differs from a scene file's, 1/30 s).
+    spec.dt = params_.solver == Solver::implicit ? std::optional<float>(static_cast<float>(implicit_dt_))
+              : auto_dt_                        ? std::nullopt
+                                                : std::optional<float>(params_.dt);
     return spec;
 }
 

@@ -39,6 +39,7 @@
 #include "drape/scene.hpp"
 #include "drape/simulation.hpp"
 #include "drape/workers.hpp"
+#include "materials.hpp"
 
 namespace drape::app {
 
@@ -54,6 +55,18 @@ inline constexpr std::uint32_t view_default_hang_size = 64;
 inline constexpr double view_frame_seconds = 1.0 / 60.0;
 /// Cost cap of automatic substeps: particle-substeps per frame (about 4 ms at 2.4e8 particle-substeps/s).
 inline constexpr double view_auto_budget = 1.0e6;
+/// Implicit solver: the step when neither the scene nor --dt gives one, a frame at 60 FPS (one step per frame, the
+/// explicit viewer's pace), and the range of the dt slider (s).
+inline constexpr double view_implicit_dt = view_frame_seconds;
+inline constexpr double view_implicit_min_dt = 1e-3;
+inline constexpr double view_implicit_max_dt = 0.1;
+/// Implicit solver, automatic steps per frame: round(view_frame_seconds / dt) within [1, this].
+inline constexpr int view_implicit_max_auto_steps = 8;
+/// Iteration budget (implicit solver): the fewest iterations per step it lowers to, the default simulation time per
+/// frame it keeps to (ms; about half a frame at 30 FPS) and the frames it averages before each adjustment.
+inline constexpr std::uint32_t view_min_iterations = 4;
+inline constexpr double view_default_sim_budget_ms = 16.0;
+inline constexpr int view_budget_frames = 4;
 /// Node mass range of the Fabric panel, grams (SPEC: 0.001-1 g).
 inline constexpr float view_min_node_mass_g = 0.001f;
 inline constexpr float view_max_node_mass_g = 1.0f;
@@ -108,14 +121,28 @@ struct Confirmation {
 /// Thousands separators for counts: 1,000,000.
 std::string grouped(std::size_t n);
 
+/// Implicit solver, automatic steps per frame: enough steps of dt for view_frame_seconds, rounded, within
+/// [1, view_implicit_max_auto_steps] (1 for any dt from 1/90 s up: one step per frame).
+int implicit_auto_steps(double dt);
+
+/// The iteration budget that keeps the frame rate with the implicit solver: from the simulation time of the last
+/// frames (ms, averaged) and the iterations a step ran, the iterations per step to run next, within
+/// [min(view_min_iterations, cap), cap] (cap: the user's iterations). Over the budget: lowered in proportion at once;
+/// under 3/4 of it: raised by at most a quarter (at least 1) per adjustment; in between: kept (no oscillation).
+std::uint32_t budget_iterations(double sim_ms, double budget_ms, std::uint32_t current, std::uint32_t ran,
+                                std::uint32_t cap);
+
 class ViewSession {
   public:
     /// Loads a built-in scene by name or a scene file (.json) and builds it. size: particles per side of a
     /// grid scene or cells per metre of the T-shirt (empty: the scene's own; "hang": view_default_hang_size).
     /// threads 0 = all hardware threads; substeps empty = automatic. Throws InvalidInput naming the flag.
     /// material: a fabric preset or "springs" replacing the scene's material (`drape view --material`).
+    /// solver: `drape view --solver/--iterations/--tolerance` (unset: the scene's); dt: `--dt`, the implicit step
+    /// or the explicit substep (an explicit one above the stability bound is refused).
     ViewSession(const std::string& scene, std::optional<std::uint32_t> size, int threads,
-                std::optional<int> substeps, const std::optional<std::string>& material = std::nullopt);
+                std::optional<int> substeps, const std::optional<std::string>& material = std::nullopt,
+                const SolverFlags& solver = {}, std::optional<double> dt = std::nullopt);
     /// Shorthand for scene "hang" of size x size particles with the seeds' spring model (tests).
     ViewSession(std::uint32_t size, int threads, std::optional<int> substeps)
         : ViewSession("hang", size, threads, substeps, std::string("springs")) {}
@@ -226,6 +253,27 @@ class ViewSession {
     void set_aero(const AeroWind& aero);
     void set_air_drag(float drag);
     void set_integrator(Integrator integrator);
+    /// Explicit or implicit. Implicit: the integrator becomes symplectic Euler, dt the implicit step (kept apart from
+    /// the explicit dt: switching back restores it), steps per frame automatic (one per frame) or the manual pace.
+    void set_solver(Solver solver);
+    Solver solver() const noexcept { return params_.solver; }
+    /// The implicit step (s), also while the explicit solver runs (used when switching).
+    double implicit_dt() const noexcept { return implicit_dt_; }
+    /// The user's iterations per step (the most; the budget may run fewer), 1..1000.
+    std::uint32_t max_iterations() const noexcept { return max_iterations_; }
+    void set_max_iterations(std::uint32_t iterations);
+    /// The iterations per step running now (the budget's choice, or max_iterations() without it).
+    std::uint32_t iterations() const noexcept { return sim_->params().implicit.iterations; }
+    void set_chebyshev_rho(float rho);
+    /// The iteration budget (implicit solver): on, the iterations follow budget_iterations() every
+    /// view_budget_frames frames so that the simulation takes about sim_budget_ms() per frame.
+    bool iteration_budget() const noexcept { return budget_on_; }
+    void set_iteration_budget(bool on);
+    double sim_budget_ms() const noexcept { return budget_ms_; }
+    void set_sim_budget_ms(double ms);
+    /// Feeds the budget one frame's simulation time (advance() does, with the measured time; tests call it with
+    /// chosen times).
+    void note_frame_sim_ms(double ms);
     /// Provot strain limiting (ratio 0 = off); ranges as in drape/simulation.hpp.
     void set_strain_limit(const StrainLimit& limit);
     /// Fixes dt (s) within (0, bound]; the panel cannot offer more than the bound.
@@ -299,6 +347,11 @@ class ViewSession {
         double frame_time = 0.0;
         bool auto_substeps = true;
         std::uint64_t topology = 0; ///< changes with the scene or the resolution (a rebuild from the start)
+        double implicit_dt = view_implicit_dt; ///< the implicit step
+        double explicit_dt = 0.0;              ///< the explicit dt the user fixed, while the implicit solver runs
+        std::uint32_t max_iterations = 30;
+        bool budget_on = true;
+        double budget_ms = view_default_sim_budget_ms;
     };
     Snapshot snapshot() const;
     void restore(const Snapshot& before);
@@ -359,6 +412,8 @@ class ViewSession {
     /// Sets dt (clamped below the bound) and the substeps that follow; false (with a message) when refused.
     bool apply_dt(double dt);
     std::size_t particle_count() const noexcept { return sim_ ? sim_->cloth().particle_count : 1; }
+    /// Sets the running iterations per step (no undo entry: the budget's, or the cap's).
+    void set_running_iterations(std::uint32_t iterations);
 
     std::uint32_t size_ = 64;
     SceneSpec spec_;
@@ -381,6 +436,13 @@ class ViewSession {
     bool running_ = true;
     bool step_pending_ = false;
     SimulationParams params_; ///< run parameters kept across rebuilds
+    double implicit_dt_ = view_implicit_dt;
+    double explicit_dt_ = 0.0;
+    std::uint32_t max_iterations_ = 30;
+    bool budget_on_ = true;
+    double budget_ms_ = view_default_sim_budget_ms;
+    double budget_sum_ms_ = 0.0; ///< simulation time of the frames since the last adjustment
+    int budget_frames_ = 0;
     std::vector<std::uint32_t> pinned_;
     std::uint64_t generation_ = 0;
     std::uint64_t markers_version_ = 0;

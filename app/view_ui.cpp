@@ -175,7 +175,8 @@ void Viewer::ui_run_mode() {
                 "state with the same total mass and materials; the old one runs until the new one is ready.");
     ImGui::Text("%s particles, %s springs", grouped(s.sim().cloth().particle_count).c_str(),
                 grouped(s.sim().cloth().spring_count()).c_str());
-    ImGui::Text("simulated %.3f s  (%s substeps)", s.sim().time(), grouped(s.sim().steps_done()).c_str());
+    ImGui::Text("simulated %.3f s  (%s %s)", s.sim().time(), grouped(s.sim().steps_done()).c_str(),
+                s.solver() == Solver::implicit ? "steps" : "substeps");
 }
 
 void Viewer::ui_scene_file() {
@@ -265,12 +266,17 @@ void Viewer::ui_physics() {
     if (changed) s.set_wind(wind, wind_strength);
     help_marker("Seed 000's analytic field: strength x (sin 10t, 0, |sin(z + 10t)|).");
     ui_aero();
+    ui_solver();
     float drag = 0.0f;
     if (edit_float("air drag", p.air_drag, 0.0f, 100.0f, "%.3f 1/s", log_flags, drag)) s.set_air_drag(drag);
+    const bool implicit = p.solver == Solver::implicit;
+    ImGui::BeginDisabled(implicit);
     int integrator = p.integrator == Integrator::verlet ? 1 : 0;
     const char* integrators[] = {"symplectic Euler", "Verlet"};
     if (ImGui::Combo("integrator", &integrator, integrators, 2))
         s.set_integrator(integrator == 1 ? Integrator::verlet : Integrator::symplectic_euler);
+    ImGui::EndDisabled();
+    if (implicit) help_marker("The explicit solver's choice; the implicit solver keeps velocities (Euler).");
     bool limit_on = p.strain_limit.ratio > 0.0f;
     float limit_ratio = limit_on ? p.strain_limit.ratio : 0.1f;
     int limit_every = static_cast<int>(p.strain_limit.every);
@@ -288,18 +294,32 @@ void Viewer::ui_physics() {
                             static_cast<std::uint32_t>(std::max(limit_every, 1))});
     float dt = 0.0f;
     const float bound = static_cast<float>(s.dt_bound());
-    if (edit_float("dt", p.dt, 1e-3f * bound, bound, "%.3e s", log_flags, dt)) s.set_dt(dt);
-    help_marker("One substep. The slider ends at the explicit stability bound: an unstable dt cannot be chosen.");
-    bool auto_dt = s.auto_dt();
-    if (ImGui::Checkbox("auto dt (0.9 x bound)", &auto_dt)) s.set_auto_dt(auto_dt);
-    ImGui::TextDisabled("stability bound %.3e s", double(bound));
+    if (implicit) {
+        if (edit_float("dt (step)", p.dt, float(view_implicit_min_dt), float(view_implicit_max_dt), "%.4f s",
+                       log_flags, dt))
+            s.set_dt(dt);
+        help_marker("One implicit step: any length is stable (1/60 s: one step per frame at 60 FPS is real time; "
+                    "1/30 s at 30 FPS).");
+        ImGui::TextDisabled("%.0f x the explicit bound %.3e s", double(p.dt) / double(bound), double(bound));
+    } else {
+        if (edit_float("dt", p.dt, 1e-3f * bound, bound, "%.3e s", log_flags, dt)) s.set_dt(dt);
+        help_marker("One substep. The slider ends at the explicit stability bound: an unstable dt cannot be chosen.");
+        bool auto_dt = s.auto_dt();
+        if (ImGui::Checkbox("auto dt (0.9 x bound)", &auto_dt)) s.set_auto_dt(auto_dt);
+        ImGui::TextDisabled("stability bound %.3e s", double(bound));
+    }
     int substeps = 0;
-    if (edit_int("substeps/frame", s.substeps(), 1, view_max_substeps, "%d", log_flags, substeps))
+    if (edit_int(implicit ? "steps/frame" : "substeps/frame", s.substeps(), 1, view_max_substeps, "%d", log_flags,
+                 substeps))
         s.set_substeps(substeps);
     bool auto_sub = s.auto_substeps();
-    if (ImGui::Checkbox("auto substeps", &auto_sub)) s.set_auto_substeps(auto_sub);
-    help_marker("Automatic: enough substeps for 1/60 s of simulated time per frame, at most ~1e6 "
-                "particle-substeps per frame (and at least 10).");
+    if (ImGui::Checkbox(implicit ? "auto steps" : "auto substeps", &auto_sub)) s.set_auto_substeps(auto_sub);
+    if (implicit)
+        help_marker("Automatic: 1/60 s of simulated time per frame in whole steps (one step per frame for any dt "
+                    "from 1/90 s up), at most 8.");
+    else
+        help_marker("Automatic: enough substeps for 1/60 s of simulated time per frame, at most ~1e6 "
+                    "particle-substeps per frame (and at least 10).");
     ImGui::EndDisabled();
     // Workers: a task arena of exactly this many (also above the core count).
     int threads = 0;
@@ -309,6 +329,44 @@ void Viewer::ui_physics() {
     help_marker("Worker threads that run the substeps and the output stage (a oneTBB arena of exactly this many; "
                 "more than the cores is allowed). Results are the same for every count.");
     ImGui::TextDisabled("%.2f ms simulated per frame", 1e3 * double(s.substeps()) * double(p.dt));
+}
+
+void Viewer::ui_solver() {
+    ViewSession& s = *session_;
+    const SimulationParams& p = s.params();
+    int solver = p.solver == Solver::implicit ? 1 : 0;
+    if (ImGui::Combo("solver", &solver, "explicit\0implicit\0"))
+        s.set_solver(solver == 1 ? Solver::implicit : Solver::explicit_euler);
+    help_marker("explicit: the seeds' substeps, each below the stability bound (cost grows like N^3 per simulated "
+                "second). implicit: backward Euler by vertex block descent (docs/implicit.md), one step per frame "
+                "whatever the resolution or stiffness; switching to it sets the integrator to symplectic Euler.");
+    if (p.solver != Solver::implicit) return;
+    ImGui::Indent();
+    int iterations = 0;
+    if (edit_int("iterations", static_cast<int>(s.max_iterations()), 1, 1000, "%d", log_flags, iterations))
+        s.set_max_iterations(static_cast<std::uint32_t>(iterations));
+    help_marker("Sweeps of vertex block descent per step, the most: more converge further (stiffer, less sag), "
+                "fewer run faster.");
+    float rho = 0.0f;
+    if (edit_float("Chebyshev rho", p.implicit.chebyshev_rho, 0.0f, 0.99f, "%.2f", clamp_flags, rho))
+        s.set_chebyshev_rho(rho);
+    help_marker("Chebyshev acceleration of the sweeps (Wang 2015): the estimate of the sweep's spectral radius; 0 = "
+                "off.");
+    bool budget = s.iteration_budget();
+    if (ImGui::Checkbox("iteration budget", &budget)) s.set_iteration_budget(budget);
+    ImGui::SameLine();
+    ImGui::PushItemWidth(90.0f);
+    float budget_ms = 0.0f;
+    if (edit_float("##budget", float(s.sim_budget_ms()), 1.0f, 100.0f, "%.0f ms", log_flags, budget_ms))
+        s.set_sim_budget_ms(budget_ms);
+    ImGui::PopItemWidth();
+    help_marker("Keeps the frame rate: when a frame's simulation takes longer than this, the iterations per step "
+                "are lowered (down to 4), and raised again (up to the slider's) when there is room.");
+    const ImplicitStats& st = s.sim().implicit_stats();
+    ImGui::Text("running %u of %u iterations%s", s.iterations(), s.max_iterations(),
+                s.iteration_budget() && s.iterations() < s.max_iterations() ? " (budget)" : "");
+    ImGui::TextDisabled("last step: %u iterations, residual %.2e", st.iterations, st.relative_residual);
+    ImGui::Unindent();
 }
 
 void Viewer::ui_aero() {
@@ -368,7 +426,13 @@ void Viewer::ui_overlay() {
     const Simulation& sim = s.sim();
     ImGui::Text("%.1f FPS   (%.2f ms / frame)", shown_fps_, shown_.frame);
     ImGui::Text("sim %.2f ms | publish %.2f ms | draw %.2f ms", shown_.sim, shown_.publish, shown_.draw);
-    ImGui::Text("substeps/frame %d   dt %.3g s", s.substeps(), double(sim.params().dt));
+    const bool implicit = sim.params().solver == Solver::implicit;
+    ImGui::Text("%s/frame %d   dt %.3g s", implicit ? "implicit steps" : "substeps", s.substeps(),
+                double(sim.params().dt));
+    if (implicit)
+        ImGui::Text("iterations %u%s   residual %.2e", sim.implicit_stats().iterations,
+                    s.iteration_budget() && s.iterations() < s.max_iterations() ? " (budget)" : "",
+                    sim.implicit_stats().relative_residual);
     ImGui::Text("particles %s   springs %s", grouped(sim.cloth().particle_count).c_str(),
                 grouped(sim.cloth().spring_count()).c_str());
     ImGui::Text("threads %d   max strain %.2f %%", s.threads(),

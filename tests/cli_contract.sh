@@ -120,6 +120,46 @@ for b in "$json_bound" "$text_bound"; do
     fi
 done
 
+# The implicit solver: bad values exit 2 with one line naming the flag or the file's field; --dt is not held to the
+# explicit bound; a good run reports the solver, its iterations and residual, and the real-time factor.
+expect_error "--solver: newton not in {explicit,implicit}" run --solver newton
+expect_error "--iterations: value 0 is outside the allowed range [1, 1000]" run --solver implicit --iterations 0
+expect_error "--iterations: '2.5' must be a whole number in [1, 1000]" run --solver implicit --iterations 2.5
+expect_error "--tolerance: value 2 is outside the allowed range [0, 1]" run --solver implicit --tolerance 2
+expect_error "--dt: value 0.5 is outside the allowed range" run --solver implicit --dt 0.5
+expect_error "--iterations: a flag of the implicit solver, but the solver is explicit" run --iterations 10
+expect_error "--integrator: verlet is a choice of the explicit solver only" run --solver implicit --integrator verlet
+expect_error "--iterations: value 5000 is outside the allowed range [1, 1000]" view --iterations 5000
+expect_error "--solver: rk4 not in {explicit,implicit}" view --solver rk4
+echo '{"physics": {"solver": "implicit", "integrator": "verlet"}}' >"$tmpdir/implicit_verlet.json"
+echo '{"physics": {"solver": "implicit", "implicit": {"chebyshev_rho": 1}}}' >"$tmpdir/implicit_rho.json"
+expect_error "implicit_verlet.json: physics.integrator = \"verlet\" is a choice of the explicit solver only" \
+    run --scene "$tmpdir/implicit_verlet.json"
+expect_error "implicit_rho.json: physics.implicit.chebyshev_rho = 1 is outside the allowed range [0, 1)" \
+    run --scene "$tmpdir/implicit_rho.json"
+if "$DRAPE" run --solver implicit --size 100 --sim-seconds 0.2 --dt 0.05 --iterations 20 --json >"$out" 2>"$err" &&
+    python3 - "$out" <<'PY'; then
+import json, math, sys
+j = json.load(open(sys.argv[1]))
+assert j["solver"] == "implicit" and j["integrator"] == "euler", j
+assert j["steps"] == j["substeps"] == 4 and abs(j["dt"] - 0.05) < 1e-9 and j["dt"] > j["dt_max"], j
+im = j["implicit"]
+assert 1 <= im["iterations"] <= 20 and im["max_iterations"] == 20 and im["method"] == "gauss_seidel", im
+assert math.isfinite(im["relative_residual"]) and im["relative_residual"] >= 0, im
+assert j["real_time_factor"] > 0 and j["finite"] and j["healthy"], j
+print("ok: drape run --solver implicit --size 100 --dt 0.05 -> %d iterations, residual %.3g, %.3gx real time"
+      % (im["iterations"], im["relative_residual"], j["real_time_factor"]))
+PY
+    :
+else
+    echo "FAIL: an implicit run"; cat "$err" "$out"; fail=1
+fi
+if "$DRAPE" run --steps 3 --json | python3 -c "import json,sys; j=json.load(sys.stdin); assert j['solver']=='explicit' and 'implicit' not in j and j['real_time_factor'] > 0, j"; then
+    echo "ok: an explicit run reports solver explicit and its real-time factor"
+else
+    echo "FAIL: the explicit run's solver fields"; fail=1
+fi
+
 # Output that cannot be written: exit 5 with one line.
 expect_exit 5 "--export-obj: cannot create directory" run --steps 1 --export-obj /dev/null/frames
 

@@ -69,6 +69,7 @@ struct AllocCase {
     Integrator integ;
     bool wind;
     MaterialModel model = MaterialModel::springs;
+    Solver solver = Solver::explicit_euler;
 };
 
 class NoAllocation : public ::testing::TestWithParam<AllocCase> {};
@@ -85,6 +86,12 @@ TEST_P(NoAllocation, StepDoesNotAllocate) {
         SimulationParams p = drape::testing::default_params(scene.cloth, c.integ, c.kernel);
         p.fused = c.fused;
         p.wind.enabled = c.wind;
+        if (c.solver == Solver::implicit) { // the multilevel guess, Chebyshev, strain limiting after each step
+            p.solver = Solver::implicit;
+            p.dt = 1.0f / 30.0f;
+            p.implicit.iterations = 3;
+            p.strain_limit.ratio = 0.1f;
+        }
         Simulation sim(std::move(scene.cloth), scene.initial, p);
         sim.step(5); // warm-up: the thread pool starts here
         sim.grab(5000, {0.0f, 0.1f, 0.0f});
@@ -113,7 +120,11 @@ INSTANTIATE_TEST_SUITE_P(
                       AllocCase{KernelPath::grid, false, Integrator::symplectic_euler, true},
                       AllocCase{KernelPath::grid, true, Integrator::symplectic_euler, true, MaterialModel::fabric},
                       AllocCase{KernelPath::grid, false, Integrator::verlet, false, MaterialModel::fabric},
-                      AllocCase{KernelPath::csr, true, Integrator::symplectic_euler, false, MaterialModel::fabric}));
+                      AllocCase{KernelPath::csr, true, Integrator::symplectic_euler, false, MaterialModel::fabric},
+                      AllocCase{KernelPath::grid, true, Integrator::symplectic_euler, true, MaterialModel::fabric,
+                                Solver::implicit},
+                      AllocCase{KernelPath::grid, true, Integrator::symplectic_euler, true, MaterialModel::springs,
+                                Solver::implicit}));
 
 // The viewer's strain-colouring stage runs every frame: cooked once, then compute() allocates nothing.
 TEST(NoAllocation, StrainFieldComputeDoesNotAllocate) {

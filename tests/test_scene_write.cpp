@@ -89,6 +89,11 @@ void expect_same_spec(const SceneSpec& a, const SceneSpec& b, const std::string&
     EXPECT_TRUE(same_bits(p.gravity, q.gravity)) << what;
     EXPECT_TRUE(same_bits(p.air_drag, q.air_drag)) << what;
     EXPECT_EQ(p.integrator, q.integrator) << what;
+    EXPECT_EQ(p.solver, q.solver) << what;
+    EXPECT_EQ(p.implicit.iterations, q.implicit.iterations) << what;
+    EXPECT_TRUE(same_bits(p.implicit.tolerance, q.implicit.tolerance)) << what;
+    EXPECT_TRUE(same_bits(p.implicit.chebyshev_rho, q.implicit.chebyshev_rho)) << what;
+    EXPECT_EQ(p.implicit.method, q.implicit.method) << what;
     EXPECT_EQ(p.wind.enabled, q.wind.enabled) << what;
     EXPECT_TRUE(same_bits(p.wind.strength, q.wind.strength)) << what;
     EXPECT_EQ(p.aero.enabled, q.aero.enabled) << what;
@@ -195,6 +200,26 @@ TEST(SceneWrite, EveryFieldIsWrittenExplicitly) {
     SceneSpec with_dt = load_scene("hang");
     with_dt.dt = 1.25e-5f;
     EXPECT_TRUE(has(scene_to_json(with_dt), "\"dt\": 1.25e-05"));
+}
+
+TEST(SceneWrite, ImplicitSolverRoundTrips) {
+    SceneSpec s = load_scene("hang");
+    s.grid.n = 8;
+    s.physics.solver = Solver::implicit;
+    s.physics.implicit = {17, 0.003f, 0.85f, ImplicitMethod::jacobi};
+    const std::string text = scene_to_json(s);
+    for (const char* field : {"\"solver\": \"implicit\"", "\"iterations\": 17", "\"tolerance\": 0.003",
+                              "\"chebyshev_rho\": 0.85", "\"method\": \"jacobi\""})
+        EXPECT_TRUE(has(text, field)) << field << "\n" << text;
+    EXPECT_FALSE(has(text, "\"dt\"")) << "absent dt stays absent (the implicit default, a frame)";
+    const SceneSpec back = parse_scene(text, "implicit.json");
+    expect_same_spec(s, back, "implicit");
+    expect_same_build(build_scene(s), build_scene(back), "implicit");
+    EXPECT_EQ(build_scene(back).params.dt, implicit_default_dt);
+    s.dt = 0.02f;
+    expect_same_spec(s, parse_scene(scene_to_json(s), "implicit_dt.json"), "implicit with dt");
+    // The explicit solver is written too (absent reads as explicit, so old files keep their meaning).
+    EXPECT_TRUE(has(scene_to_json(load_scene("hang")), "\"solver\": \"explicit\""));
 }
 
 TEST(SceneWrite, FloatsReadBackToTheSameBits) {

@@ -144,6 +144,25 @@ INSTANTIATE_TEST_SUITE_P(
         BadFile{"collider_friction", R"({"colliders": [{"type": "ground", "friction": 2}]})", "[0, 1]"},
         BadFile{"strain_passes", R"({"physics": {"strain_limit": {"passes": 0}}})", "physics.strain_limit.passes"},
         BadFile{"wind_type", R"({"physics": {"wind": {"enabled": "yes"}}})", "physics.wind.enabled must be true or false"},
+        // The implicit solver's fields.
+        BadFile{"solver_name", R"({"physics": {"solver": "newton"}})",
+                "physics.solver = \"newton\" is not one of \"explicit\", \"implicit\""},
+        BadFile{"implicit_verlet", R"({"physics": {"solver": "implicit", "integrator": "verlet"}})",
+                "physics.integrator = \"verlet\" is a choice of the explicit solver only"},
+        BadFile{"implicit_iterations", R"({"physics": {"implicit": {"iterations": 0}}})",
+                "physics.implicit.iterations = 0 is outside the allowed range [1, 1000]"},
+        BadFile{"implicit_iterations_fraction", R"({"physics": {"implicit": {"iterations": 2.5}}})",
+                "physics.implicit.iterations must be a whole number in [1, 1000]"},
+        BadFile{"implicit_tolerance", R"({"physics": {"implicit": {"tolerance": -0.1}}})",
+                "physics.implicit.tolerance = -0.1 is outside the allowed range [0, 1]"},
+        BadFile{"implicit_rho_one", R"({"physics": {"implicit": {"chebyshev_rho": 1}}})",
+                "physics.implicit.chebyshev_rho = 1 is outside the allowed range [0, 1)"},
+        BadFile{"implicit_rho_big", R"({"physics": {"implicit": {"chebyshev_rho": 1.5}}})",
+                "physics.implicit.chebyshev_rho = 1.5 is outside the allowed range"},
+        BadFile{"implicit_method", R"({"physics": {"implicit": {"method": "sor"}}})",
+                "physics.implicit.method = \"sor\" is not one of \"gauss_seidel\", \"jacobi\""},
+        BadFile{"implicit_unknown", R"({"physics": {"implicit": {"sweeps": 3}}})",
+                "physics.implicit.sweeps is not a known field"},
         // Numbers a double cannot hold, and NaN / Infinity (not JSON): a range error at the field, never an abort.
         BadFile{"overflow_n", R"({"cloth": {"n": 1e400}})",
                 "cloth.n = 1e400 is not a finite number; allowed range [2, 4096]"},
@@ -192,6 +211,33 @@ TEST(Scenes, MinimalFileGetsTheHangDefaults) {
 } // namespace
 
 namespace {
+
+TEST(Scenes, ImplicitSolverFieldsAndItsDefaultStep) {
+    // Absent: the explicit solver, its dt 0.9 x the stability bound.
+    const SceneSpec plain = parse_scene(R"({"cloth": {"n": 16}})", "test.json");
+    EXPECT_EQ(plain.physics.solver, Solver::explicit_euler);
+    const BuiltScene explicit_scene = build_scene(plain);
+    EXPECT_LT(explicit_scene.params.dt, 0.01f);
+    // Implicit without a dt: one frame, 1/30 s; with one: the file's.
+    const SceneSpec s = parse_scene(R"({"cloth": {"n": 16}, "physics": {"solver": "implicit",
+        "implicit": {"iterations": 12, "tolerance": 0.01, "chebyshev_rho": 0.5, "method": "jacobi"}}})", "test.json");
+    EXPECT_EQ(s.physics.solver, Solver::implicit);
+    EXPECT_EQ(s.physics.implicit.iterations, 12u);
+    EXPECT_EQ(s.physics.implicit.tolerance, 0.01f);
+    EXPECT_EQ(s.physics.implicit.chebyshev_rho, 0.5f);
+    EXPECT_EQ(s.physics.implicit.method, ImplicitMethod::jacobi);
+    EXPECT_FALSE(s.dt.has_value());
+    const BuiltScene b = build_scene(s);
+    EXPECT_EQ(b.params.dt, implicit_default_dt);
+    EXPECT_EQ(b.params.solver, Solver::implicit);
+    const SceneSpec fixed = parse_scene(R"({"cloth": {"n": 16}, "physics": {"solver": "implicit", "dt": 0.05}})", "t.json");
+    EXPECT_EQ(build_scene(fixed).params.dt, 0.05f);
+    // It runs: a step of a frame, far above the explicit bound.
+    Simulation sim(b.cloth, b.initial, b.params);
+    sim.step(2);
+    EXPECT_TRUE(sim.health().finite);
+    EXPECT_GT(sim.implicit_stats().iterations, 0u);
+}
 
 TEST(Scenes, OutlinePanelsSewnIntoABag) {
     const std::string path = std::string(DRAPE_SOURCE_DIR) + "/scenes/examples/bag.json";

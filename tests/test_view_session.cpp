@@ -641,3 +641,144 @@ TEST(ViewSessionFabric, SwitchingModels) {
     EXPECT_EQ(d.fabric().fabric.name, "denim");
     EXPECT_THROW(ViewSession("hang", 16u, 1, std::nullopt, std::string("velvet")), InvalidInput);
 }
+
+// The implicit solver in the viewer: one step per frame of any length, each solver keeps its own dt, the iteration
+// budget lowers the iterations when a frame's simulation is over its time and raises them when there is room.
+TEST(ViewSessionImplicit, SwitchingSolversKeepsEachDtAndThePace) {
+    ViewSession s(16, 1, std::nullopt);
+    EXPECT_EQ(s.solver(), Solver::explicit_euler);
+    const int explicit_substeps = s.substeps();
+    s.set_integrator(Integrator::verlet);
+    s.set_solver(Solver::implicit);
+    EXPECT_EQ(s.solver(), Solver::implicit);
+    EXPECT_EQ(s.params().integrator, Integrator::symplectic_euler) << "switching to implicit sets Euler";
+    EXPECT_EQ(s.params().dt, static_cast<float>(view_implicit_dt));
+    EXPECT_GT(double(s.params().dt), s.dt_bound()) << "the step is far above the explicit bound";
+    EXPECT_EQ(s.substeps(), 1) << "one step per frame";
+    EXPECT_EQ(s.advance(), 1u);
+    EXPECT_TRUE(s.sim().health().finite);
+    EXPECT_GT(s.sim().implicit_stats().iterations, 0u);
+    // Verlet is the explicit solver's: refused, nothing changes.
+    s.set_integrator(Integrator::verlet);
+    EXPECT_EQ(s.params().integrator, Integrator::symplectic_euler);
+    EXPECT_EQ(s.message().level, MessageLevel::warning) << s.message().text;
+    // The step: any length in range, automatic steps per frame = round(1/60 s / dt).
+    s.set_dt(0.004);
+    EXPECT_FLOAT_EQ(s.params().dt, 0.004f);
+    EXPECT_EQ(s.substeps(), 4);
+    s.set_dt(1.0 / 30.0);
+    EXPECT_EQ(s.substeps(), 1);
+    s.set_dt(1.0); // clamped to the slider's end
+    EXPECT_FLOAT_EQ(s.params().dt, static_cast<float>(view_implicit_max_dt));
+    // Stiffer springs keep the implicit step (no bound to follow).
+    s.set_stiffness(SpringKind::structural, 16000.0f);
+    EXPECT_EQ(s.sim().cloth().material[0].stiffness, 16000.0f);
+    EXPECT_FLOAT_EQ(s.params().dt, static_cast<float>(view_implicit_max_dt));
+    EXPECT_EQ(s.advance(), 1u);
+    EXPECT_TRUE(s.sim().health().finite);
+    // Back to explicit: automatic dt below the new bound, automatic substeps; the implicit step is remembered.
+    s.set_solver(Solver::explicit_euler);
+    EXPECT_EQ(s.solver(), Solver::explicit_euler);
+    EXPECT_TRUE(stable(s));
+    EXPECT_GE(s.substeps(), 10);
+    EXPECT_NE(s.substeps(), explicit_substeps) << "the stiffer springs need more substeps";
+    EXPECT_EQ(s.advance(), static_cast<std::size_t>(s.substeps()));
+    EXPECT_FLOAT_EQ(static_cast<float>(s.implicit_dt()), static_cast<float>(view_implicit_max_dt));
+    // Undo returns to the implicit solver and its step.
+    s.end_edit();
+    s.undo();
+    EXPECT_EQ(s.solver(), Solver::implicit);
+    EXPECT_FLOAT_EQ(s.params().dt, static_cast<float>(view_implicit_max_dt));
+    EXPECT_EQ(s.advance(), 1u);
+}
+
+TEST(ViewSessionImplicit, ExplicitFixedDtComesBackAfterAnImplicitSpell) {
+    ViewSession s(16, 1, std::nullopt);
+    const double fixed = 0.5 * s.dt_bound();
+    s.set_dt(fixed);
+    EXPECT_FALSE(s.auto_dt());
+    s.set_solver(Solver::implicit);
+    s.set_solver(Solver::explicit_euler);
+    EXPECT_FALSE(s.auto_dt());
+    EXPECT_FLOAT_EQ(s.params().dt, static_cast<float>(fixed));
+}
+
+TEST(ViewSessionImplicit, BudgetIterationsRule) {
+    // Over the budget: lowered in proportion to the iterations that ran, at least by one, never below the floor.
+    EXPECT_EQ(budget_iterations(32.0, 16.0, 40, 40, 40), 20u);
+    EXPECT_EQ(budget_iterations(16.5, 16.0, 40, 40, 40), 38u);
+    EXPECT_EQ(budget_iterations(1000.0, 16.0, 40, 40, 40), view_min_iterations);
+    EXPECT_EQ(budget_iterations(1000.0, 16.0, view_min_iterations, 4, 40), view_min_iterations);
+    // Between 3/4 of the budget and the budget: kept.
+    EXPECT_EQ(budget_iterations(14.0, 16.0, 20, 20, 40), 20u);
+    // Room: raised by at most a quarter (at least one), never above the cap.
+    EXPECT_EQ(budget_iterations(1.0, 16.0, 20, 20, 40), 25u);
+    EXPECT_EQ(budget_iterations(1.0, 16.0, 4, 4, 40), 5u);
+    EXPECT_EQ(budget_iterations(1.0, 16.0, 39, 39, 40), 40u);
+    EXPECT_EQ(budget_iterations(1.0, 16.0, 40, 40, 40), 40u);
+    // A cap below the floor is the floor.
+    EXPECT_EQ(budget_iterations(1000.0, 16.0, 2, 2, 2), 2u);
+    // Steps stopped early by a tolerance: the cost is that of the iterations that ran.
+    EXPECT_EQ(budget_iterations(32.0, 16.0, 40, 10, 40), view_min_iterations + 1);
+}
+
+TEST(ViewSessionImplicit, IterationBudgetFollowsTheFrameTime) {
+    ViewSession s(16, 1, std::nullopt);
+    s.set_solver(Solver::implicit);
+    s.set_max_iterations(40);
+    EXPECT_EQ(s.iterations(), 40u);
+    EXPECT_TRUE(s.iteration_budget());
+    // Frames far over the budget: down to the floor, a few frames at a time (not every frame).
+    const double budget = s.sim_budget_ms();
+    for (int f = 0; f < view_budget_frames - 1; ++f) s.note_frame_sim_ms(10.0 * budget);
+    EXPECT_EQ(s.iterations(), 40u) << "adjusted only every view_budget_frames frames";
+    for (int f = 0; f < 40 * view_budget_frames; ++f) s.note_frame_sim_ms(10.0 * budget);
+    EXPECT_EQ(s.iterations(), view_min_iterations);
+    EXPECT_EQ(s.sim().params().implicit.iterations, view_min_iterations);
+    EXPECT_EQ(s.max_iterations(), 40u) << "the user's cap stays";
+    EXPECT_EQ(s.advance(), 1u);
+    EXPECT_LE(s.sim().implicit_stats().iterations, view_min_iterations);
+    // Room again: back up to the cap, never above it.
+    for (int f = 0; f < 40 * view_budget_frames; ++f) s.note_frame_sim_ms(0.01 * budget);
+    EXPECT_EQ(s.iterations(), 40u);
+    // Budget off: the cap runs whatever the frame time.
+    for (int f = 0; f < 4 * view_budget_frames; ++f) s.note_frame_sim_ms(10.0 * budget);
+    EXPECT_LT(s.iterations(), 40u);
+    s.set_iteration_budget(false);
+    EXPECT_EQ(s.iterations(), 40u);
+    for (int f = 0; f < 4 * view_budget_frames; ++f) s.note_frame_sim_ms(10.0 * budget);
+    EXPECT_EQ(s.iterations(), 40u);
+    // The explicit solver ignores it.
+    s.set_iteration_budget(true);
+    s.set_solver(Solver::explicit_euler);
+    for (int f = 0; f < 4 * view_budget_frames; ++f) s.note_frame_sim_ms(10.0 * budget);
+    EXPECT_EQ(s.sim().params().implicit.iterations, 40u);
+}
+
+TEST(ViewSessionImplicit, FlagsScenesAndSavedScenes) {
+    ViewSession s("hang", 16, 1, std::nullopt, std::string("springs"), SolverFlags{"implicit", 12, 0.01f, {}}, 0.02);
+    EXPECT_EQ(s.solver(), Solver::implicit);
+    EXPECT_FLOAT_EQ(s.params().dt, 0.02f);
+    EXPECT_EQ(s.max_iterations(), 12u);
+    EXPECT_EQ(s.params().implicit.tolerance, 0.01f);
+    EXPECT_EQ(s.advance(), 1u);
+    // What File > Save scene writes reads back as the same solver, step and iterations.
+    const SceneSpec spec = parse_scene(scene_to_json(s.current_spec()), "saved.json");
+    EXPECT_EQ(spec.physics.solver, Solver::implicit);
+    ASSERT_TRUE(spec.dt.has_value());
+    EXPECT_FLOAT_EQ(*spec.dt, 0.02f);
+    EXPECT_EQ(spec.physics.implicit.iterations, 12u);
+    // Bad flags: refused naming the flag.
+    try {
+        ViewSession bad("hang", 16, 1, std::nullopt, std::string("springs"), SolverFlags{{}, 12, {}, {}});
+        ADD_FAILURE() << "--iterations with the explicit solver was accepted";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("--iterations"), std::string::npos) << e.what();
+    }
+    try {
+        ViewSession bad("hang", 16, 1, std::nullopt, std::string("springs"), SolverFlags{}, 0.05);
+        ADD_FAILURE() << "an explicit --dt above the bound was accepted";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("stability bound"), std::string::npos) << e.what();
+    }
+}

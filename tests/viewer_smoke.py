@@ -205,6 +205,8 @@ def main():
                         (["--width", "10"], "--width"), (["--screenshot", "shot.jpg"], ".png"),
                         (["--frames", "0"], "--frames"), (["--threads", "0"], "--threads"),
                         (["--scene", "nowhere"], "--scene"), (["--scene", "tshirt", "--size", "5"], "[10, 1000]"),
+                        (["--solver", "newton"], "--solver"), (["--iterations", "0"], "[1, 1000]"),
+                        (["--iterations", "10"], "--solver implicit"), (["--dt", "1"], "--dt"),
                         (["--frames", "1"], "xvfb-run")):
         p = subprocess.run([args.drape, "view"] + args_, capture_output=True, text=True, timeout=60, env=no_display)
         lines = p.stderr.strip().splitlines()
@@ -298,6 +300,28 @@ def main():
         os.makedirs(args.keep, exist_ok=True)
         shutil.copy(shot, os.path.join(args.keep, "viewer_smoke.png"))
     shutil.rmtree(tmp, ignore_errors=True)
+
+    # The implicit solver, with every panel open (the solver's controls drawn): one step per frame, its iterations
+    # and residual in the stats.
+    cmd = [xvfb, "-a", "-s", "-screen 0 1600x1000x24", args.drape, "view", "--frames", "20", "--solver", "implicit",
+           "--iterations", "20", "--panels-open", "--stats-json", "--no-vsync"]
+    print("running:", " ".join(cmd))
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
+    sys.stderr.write(proc.stderr)
+    lines = [l for l in proc.stdout.splitlines() if l.strip()]
+    if proc.returncode != 0 or len(lines) != 1:
+        print(f"FAIL: the implicit viewer run exited with {proc.returncode}, stdout {proc.stdout!r}")
+        return 1
+    stats = json.loads(lines[0])
+    im = stats.get("implicit", {})
+    if not (stats.get("solver") == "implicit" and stats["substeps_per_frame"] == 1 and stats["finite"] and
+            4 <= im.get("iterations", 0) <= 20 and im.get("max_iterations") == 20 and
+            1 <= im.get("last_step_iterations", 0) <= 20 and 0 <= im.get("relative_residual", -1) < 1e30 and
+            stats.get("real_time_factor", 0) > 0):
+        print(f"FAIL: implausible implicit stats: {stats}")
+        return 1
+    print(f"ok: implicit viewer: {stats['fps']:.1f} FPS, {stats['real_time_factor']:.2f}x real time, "
+          f"{im['iterations']} iterations, residual {im['relative_residual']:.3g}")
 
     # Input, driven by xdotool on the real window. Not under AddressSanitizer: an instrumented viewer draws a frame in
     # seconds, so xdotool's presses and drags land between frames and the checks measure timing, not the input logic

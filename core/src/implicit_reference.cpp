@@ -242,7 +242,9 @@ double movable_norm(const ImplicitProblem& p, std::span<const double> g) {
 }
 
 namespace {
-Eigen::SparseMatrix<double> hessian_unchecked(const ImplicitProblem& p, std::span<const double> x, bool projected) {
+/// `bend`: bending_hessian of the cloth's elements (constant: Newton computes it once).
+Eigen::SparseMatrix<double> hessian_unchecked(const ImplicitProblem& p, std::span<const double> x, bool projected,
+                                              const std::vector<BendTriplet>& bend) {
     const Cloth& c = *p.cloth;
     const std::size_t n = c.particle_count;
     const double h = p.h;
@@ -285,7 +287,7 @@ Eigen::SparseMatrix<double> hessian_unchecked(const ImplicitProblem& p, std::spa
             }
     }
     const double bend_scale = 1.0 + double(c.bending.damping) / h;
-    for (const BendTriplet& q : bending_hessian(c.bending.elements, n)) {
+    for (const BendTriplet& q : bend) {
         if (fixed(p, q.row) || fixed(p, q.col)) continue;
         for (int a = 0; a < 3; ++a) t.emplace_back(int(3 * q.row + a), int(3 * q.col + a), bend_scale * q.value);
     }
@@ -298,7 +300,7 @@ Eigen::SparseMatrix<double> hessian_unchecked(const ImplicitProblem& p, std::spa
 Eigen::SparseMatrix<double> implicit_hessian(const ImplicitProblem& p, std::span<const double> x) {
     validate_implicit_problem(p);
     check_positions(p, x, "x");
-    return hessian_unchecked(p, x, true);
+    return hessian_unchecked(p, x, true, bending_hessian(p.cloth->bending.elements, p.cloth->particle_count));
 }
 
 NewtonResult newton_reference(const ImplicitProblem& p, std::span<const double> start, double tolerance,
@@ -331,16 +333,17 @@ NewtonResult newton_reference(const ImplicitProblem& p, std::span<const double> 
     r.gradient_history.push_back(gnorm);
 
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+    const std::vector<BendTriplet> bend = bending_hessian(p.cloth->bending.elements, n);
     while (r.iterations < max_iterations && !(gnorm <= tolerance)) {
         // The exact Hessian when it is positive definite (every pivot of its LDL^T > 0): quadratic convergence; the
         // projected one otherwise (positive definite with the inertia term, so p is a descent direction).
-        Eigen::SparseMatrix<double> H = hessian_unchecked(p, r.x, false);
+        Eigen::SparseMatrix<double> H = hessian_unchecked(p, r.x, false, bend);
         if (r.iterations == 0)
             ldlt.analyzePattern(H); // the pattern is the cloth's (every spring and element), whatever x is
         ldlt.factorize(H);
         if (!(ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 0.0)) {
             ++r.projected_iterations;
-            H = hessian_unchecked(p, r.x, true);
+            H = hessian_unchecked(p, r.x, true, bend);
             ldlt.factorize(H);
         }
         bool solved = false;
@@ -369,12 +372,12 @@ NewtonResult newton_reference(const ImplicitProblem& p, std::span<const double> 
         for (int halving = 0; halving < 60 && !accepted; ++halving, alpha *= 0.5) {
             for (int k = 0; k < dim; ++k) xt[std::size_t(k)] = r.x[std::size_t(k)] + alpha * step[k];
             Gt = objective_and_magnitude(p, xt, mt);
-            if (std::isfinite(Gt) && Gt <= G + 1e-4 * alpha * slope) {
-                accepted = true;
-            } else if (-alpha * slope <= rounding) {
+            if (-alpha * slope <= rounding) { // G cannot see the decrease (Armijo would pass or fail on noise)
                 gradient_unchecked(p, xt, {gt.data(), 3 * n});
-                if (norm_unchecked(p, {gt.data(), 3 * n}) < gnorm) accepted = true;
+                if (std::isfinite(Gt) && norm_unchecked(p, {gt.data(), 3 * n}) < gnorm) accepted = true;
                 else break; // below the rounding floor and no better: nothing left to gain
+            } else if (std::isfinite(Gt) && Gt <= G + 1e-4 * alpha * slope) {
+                accepted = true;
             }
             if (accepted) break;
         }

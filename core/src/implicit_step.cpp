@@ -4,52 +4,205 @@
 //   1. per particle: the inertial prediction y = x^n + h v^n + h^2 (g + wind + f_aero / m) and the initial guess
 //      (VBD paper section 3.6, "adaptive"): x^n + h v^n + h^2 (s g + the rest), s = the part of gravity the particle
 //      was last seen accelerating with, clamped to [0, 1] (a resting particle starts at rest, a falling one falls);
-//   2. `iterations` sweeps: colours in order, the vertices of a colour in fixed chunks in parallel, each vertex one
-//      local Newton step (vbd.hpp) in place (Gauss-Seidel), or every vertex from the previous sweep (Jacobi);
-//      after each sweep Chebyshev's extrapolation (VBD section 3.7; Wang 2015) when chebyshev_rho > 0; an early stop
-//      once the sweep residual falls below tolerance x the first sweep's;
-//   3. v^{n+1} = (x - x^n) / h.
+//   2. on a grid cloth of the fabric model, the multilevel guess: the same step solved on coarser grids of the same
+//      fabric, coarsest first, each level's displacement interpolated onto the next finer one as its initial guess;
+//   3. the sweeps (vbd::Solver::run): colours in order, each vertex one local Newton step, Chebyshev acceleration;
+//   4. v^{n+1} = (x - x^n) / h.
 // The step then goes through the same strain-limit and collide passes as an explicit substep (substep.cpp).
 // Determinism: a vertex reads only vertices of other colours and writes only itself; residuals are summed per fixed
-// chunk and the chunks in order; so every thread count gives the same bits. No allocation: the scratch is cooked
-// with the solver (cook_implicit).
+// chunk and the chunks in order; interpolation is per node; so every thread count gives the same bits. No allocation:
+// the scratch is cooked with the solver (cook_implicit).
 #include <algorithm>
 #include <cmath>
 
 #include "drape/simulation.hpp"
 #include "for_each_index.hpp"
-#include "vbd.hpp"
+#include "implicit_solver.hpp"
 
 namespace drape {
 
 const char* solver_name(Solver solver) noexcept { return solver == Solver::implicit ? "implicit" : "explicit"; }
 
-namespace {
-constexpr std::size_t vbd_chunk = 256; ///< vertices per parallel chunk of a colour (fixed: determinism)
+Simulation::~Simulation() = default;
+Simulation::Simulation(Simulation&&) noexcept = default;
+Simulation& Simulation::operator=(Simulation&&) noexcept = default;
+
+const VbdGraph& Simulation::vbd_graph() const noexcept {
+    static const VbdGraph empty;
+    return implicit_ ? implicit_->fine.graph() : empty;
 }
 
+namespace {
+
+/// Coarse levels stop below this many particles per side.
+constexpr std::uint32_t coarsest_side = 5;
+
+/// Bilinear sample of a columns x rows grid array at fractional node coordinates (fi, fj).
+inline float sample(const float* a, std::uint32_t columns, std::uint32_t rows, float fi, float fj) noexcept {
+    const std::uint32_t i0 = std::min(static_cast<std::uint32_t>(fi), columns - 2);
+    const std::uint32_t j0 = std::min(static_cast<std::uint32_t>(fj), rows - 2);
+    const float s = fi - float(i0), t = fj - float(j0);
+    const std::size_t k = std::size_t(j0) * columns + i0;
+    const float top = a[k] + s * (a[k + 1] - a[k]);
+    const float bottom = a[k + columns] + s * (a[k + columns + 1] - a[k + columns]);
+    return top + t * (bottom - top);
+}
+
+/// The grid coordinate on a grid of `from` nodes of node `i` of a grid of `to` nodes over the same side.
+inline float map_node(std::uint32_t i, std::uint32_t to, std::uint32_t from) noexcept {
+    return float(i) * float(from - 1) / float(to - 1);
+}
+
+/// For every node of a (tc x tr) grid: out = sample of src - sample of base (or of src alone) at the node.
+template <bool Parallel>
+void resample(const float* src, const float* base, std::uint32_t sc, std::uint32_t sr, float* out, std::uint32_t tc,
+              std::uint32_t tr) {
+    for_each_index<Parallel>(tr, [&](std::size_t j) {
+        const float fj = map_node(static_cast<std::uint32_t>(j), tr, sr);
+        for (std::uint32_t i = 0; i < tc; ++i) {
+            const float fi = map_node(i, tc, sc);
+            float v = sample(src, sc, sr, fi, fj);
+            if (base) v -= sample(base, sc, sr, fi, fj);
+            out[j * tc + i] = v;
+        }
+    });
+}
+
+} // namespace
+
 void Simulation::cook_implicit() {
-    if (vbd_.particle_count == cloth_.particle_count && !vbd_.colour_offsets.empty()) return;
-    vbd_ = vbd::cook(cloth_);
-    const std::size_t n = cloth_.particle_count;
-    for (std::vector<float>* a : {&pred_x_, &pred_y_, &pred_z_, &cheb1_x_, &cheb1_y_, &cheb1_z_, &cheb2_x_, &cheb2_y_,
-                                  &cheb2_z_, &jac_x_, &jac_y_, &jac_z_})
-        a->assign(n, 0.0f);
-    colour_chunk_base_.assign(vbd_.colour_count() + 1, 0);
-    for (std::size_t c = 0; c < vbd_.colour_count(); ++c) {
-        const std::size_t size = vbd_.colour_offsets[c + 1] - vbd_.colour_offsets[c];
-        colour_chunk_base_[c + 1] = colour_chunk_base_[c] + static_cast<std::uint32_t>((size + vbd_chunk - 1) / vbd_chunk);
+    if (implicit_) return;
+    auto solver = std::make_unique<ImplicitSolver>();
+    solver->fine.cook(cloth_);
+    // Coarse levels: a square grid cloth that can rebuild its fabric on coarser grids.
+    if (cloth_.coarsen && cloth_.grid && cloth_.grid->columns == cloth_.grid->rows && cloth_.grid->columns >= 2 * coarsest_side) {
+        solver->columns = solver->rows = cloth_.grid->columns;
+        for (std::uint32_t n = (cloth_.grid->columns + 1) / 2; n >= coarsest_side; n = (n + 1) / 2) {
+            CoarseLevel level;
+            level.cloth = cloth_.coarsen(n);
+            if (!level.cloth.grid || level.cloth.grid->columns != n || level.cloth.particle_count != std::size_t(n) * n)
+                break;
+            level.columns = level.rows = n;
+            level.solver.cook(level.cloth);
+            const std::size_t count = level.cloth.particle_count;
+            for (std::vector<float>* a : {&level.x0, &level.y0, &level.z0, &level.vx, &level.vy, &level.vz, &level.gx,
+                                          &level.gy, &level.gz, &level.x, &level.y, &level.z, &level.inv_mass})
+                a->assign(count, 0.0f);
+            level.free_inv_mass = level.cloth.free_inv_mass.size() == count
+                                      ? level.cloth.free_inv_mass
+                                      : std::vector<float>(level.cloth.inv_mass.begin(),
+                                                           level.cloth.inv_mass.begin() + std::ptrdiff_t(count));
+            level.nearest.resize(count);
+            const std::uint32_t fc = solver->columns;
+            for (std::uint32_t j = 0; j < n; ++j)
+                for (std::uint32_t i = 0; i < n; ++i)
+                    level.nearest[std::size_t(j) * n + i] =
+                        static_cast<std::uint32_t>(std::lround(map_node(j, n, fc))) * fc +
+                        static_cast<std::uint32_t>(std::lround(map_node(i, n, fc)));
+            solver->coarse.push_back(std::move(level));
+        }
+        for (std::vector<float>* a : {&solver->corr_x, &solver->corr_y, &solver->corr_z})
+            a->assign(cloth_.particle_count, 0.0f);
     }
-    const std::size_t jacobi_chunks = (n + vbd_chunk - 1) / vbd_chunk;
-    chunk_residual_.assign(std::max<std::size_t>(colour_chunk_base_.back(), jacobi_chunks), 0.0);
+    implicit_ = std::move(solver);
+}
+
+/// Step 2 above: fills buffer B's positions (holding the fine initial guess) with the multilevel guess.
+template <bool Parallel> void Simulation::multilevel_guess() {
+    ImplicitSolver& is = *implicit_;
+    const StateBuffer& a = buffers_[current_];
+    StateBuffer& b = buffers_[1 - current_];
+    const std::uint32_t fc = is.columns, fr = is.rows;
+    const float h = params_.dt, h2 = h * h;
+    const float gx = params_.gravity[0], gy = params_.gravity[1], gz = params_.gravity[2];
+    const double t = static_cast<double>(steps_done_) * static_cast<double>(h);
+    const bool wind = params_.wind.enabled;
+    const float wind_x = params_.wind.strength * static_cast<float>(std::sin(10.0 * t));
+    const float wind_phase = static_cast<float>(std::fmod(10.0 * t + cloth_.origin[2], 2.0 * M_PI));
+    for (std::size_t l = is.coarse.size(); l-- > 0;) {
+        CoarseLevel& L = is.coarse[l];
+        const std::uint32_t n = L.columns;
+        const std::size_t count = L.cloth.particle_count;
+        resample<Parallel>(a.x.data(), nullptr, fc, fr, L.x0.data(), n, n);
+        resample<Parallel>(a.y.data(), nullptr, fc, fr, L.y0.data(), n, n);
+        resample<Parallel>(a.z.data(), nullptr, fc, fr, L.z0.data(), n, n);
+        resample<Parallel>(a.u.data(), nullptr, fc, fr, L.vx.data(), n, n);
+        resample<Parallel>(a.v.data(), nullptr, fc, fr, L.vy.data(), n, n);
+        resample<Parallel>(a.w.data(), nullptr, fc, fr, L.vz.data(), n, n);
+        resample<Parallel>(b.x.data(), nullptr, fc, fr, L.gx.data(), n, n);
+        resample<Parallel>(b.y.data(), nullptr, fc, fr, L.gy.data(), n, n);
+        resample<Parallel>(b.z.data(), nullptr, fc, fr, L.gz.data(), n, n);
+        if (l + 1 < is.coarse.size()) { // the next coarser level's correction of the guess
+            const CoarseLevel& C = is.coarse[l + 1];
+            resample<Parallel>(C.x.data(), C.gx.data(), C.columns, C.rows, L.x.data(), n, n);
+            resample<Parallel>(C.y.data(), C.gy.data(), C.columns, C.rows, L.y.data(), n, n);
+            resample<Parallel>(C.z.data(), C.gz.data(), C.columns, C.rows, L.z.data(), n, n);
+        } else {
+            std::fill(L.x.begin(), L.x.end(), 0.0f);
+            std::fill(L.y.begin(), L.y.end(), 0.0f);
+            std::fill(L.z.begin(), L.z.end(), 0.0f);
+        }
+        float* px = L.solver.pred_x();
+        float* py = L.solver.pred_y();
+        float* pz = L.solver.pred_z();
+        for_each_index<Parallel>((count + block_particles - 1) / block_particles, [&](std::size_t blk) {
+            for (std::size_t k = blk * block_particles, end = std::min(count, (blk + 1) * block_particles); k < end; ++k) {
+                const bool fixed = cloth_.inv_mass[L.nearest[k]] == 0.0f || L.free_inv_mass[k] == 0.0f;
+                L.inv_mass[k] = fixed ? 0.0f : L.free_inv_mass[k];
+                if (fixed) {
+                    px[k] = L.x[k] = L.gx[k] = L.x0[k];
+                    py[k] = L.y[k] = L.gy[k] = L.y0[k];
+                    pz[k] = L.z[k] = L.gz[k] = L.z0[k];
+                    continue;
+                }
+                float ex = 0.0f, ez = 0.0f;
+                if (wind) {
+                    ex = wind_x;
+                    ez = params_.wind.strength * std::fabs(std::sin(L.z0[k] + wind_phase));
+                }
+                px[k] = L.x0[k] + h * L.vx[k] + h2 * (gx + ex);
+                py[k] = L.y0[k] + h * L.vy[k] + h2 * gy;
+                pz[k] = L.z0[k] + h * L.vz[k] + h2 * (gz + ez);
+                L.x[k] += L.gx[k]; // the guess plus the coarser correction
+                L.y[k] += L.gy[k];
+                L.z[k] += L.gz[k];
+            }
+        });
+        // A level has a quarter of the particles of the next finer one: twice its sweeps cost half as much.
+        ImplicitParams level_params = params_.implicit;
+        level_params.iterations = std::min<std::uint32_t>(1000, level_params.iterations << std::min<std::size_t>(l + 1, 8));
+        L.solver.run<Parallel>({L.x0.data(), L.y0.data(), L.z0.data(), L.x.data(), L.y.data(), L.z.data(),
+                                L.inv_mass.data()},
+                               level_params, h, params_.air_drag);
+        if (!params_.colliders.empty())
+            collide_range(params_.colliders, L.x.data(), L.y.data(), L.z.data(), L.vx.data(), L.vy.data(),
+                          L.vz.data(), L.inv_mass.data(), 0, count, L.x0.data(), L.y0.data(), L.z0.data());
+    }
+    // The cloth's guess plus the finest coarse level's correction.
+    const CoarseLevel& C = is.coarse.front();
+    float* cx = is.corr_x.data();
+    float* cy = is.corr_y.data();
+    float* cz = is.corr_z.data();
+    resample<Parallel>(C.x.data(), C.gx.data(), C.columns, C.rows, cx, fc, fr);
+    resample<Parallel>(C.y.data(), C.gy.data(), C.columns, C.rows, cy, fc, fr);
+    resample<Parallel>(C.z.data(), C.gz.data(), C.columns, C.rows, cz, fc, fr);
+    const std::size_t n = cloth_.particle_count;
+    for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
+        for (std::size_t i = blk * block_particles, end = std::min(n, (blk + 1) * block_particles); i < end; ++i) {
+            if (cloth_.inv_mass[i] == 0.0f) continue;
+            b.x[i] += cx[i];
+            b.y[i] += cy[i];
+            b.z[i] += cz[i];
+        }
+    });
 }
 
 template <bool Parallel> void Simulation::implicit_step() {
     const std::size_t n = cloth_.particle_count;
+    ImplicitSolver& is = *implicit_;
     const StateBuffer& a = buffers_[current_];
     StateBuffer& b = buffers_[1 - current_];
     const float h = params_.dt, h2 = h * h, inv_h = 1.0f / h;
-    const ImplicitParams& ip = params_.implicit;
     const float* inv_mass = cloth_.inv_mass.data();
 
     if (params_.aero.enabled) aero_forces_stage<Parallel>();
@@ -62,14 +215,17 @@ template <bool Parallel> void Simulation::implicit_step() {
     const bool wind = params_.wind.enabled;
     const float wind_x = params_.wind.strength * static_cast<float>(std::sin(10.0 * t));
     const float wind_phase = static_cast<float>(std::fmod(10.0 * t + cloth_.origin[2], 2.0 * M_PI));
+    float* pred_x = is.fine.pred_x();
+    float* pred_y = is.fine.pred_y();
+    float* pred_z = is.fine.pred_z();
     for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
         const std::size_t begin = blk * block_particles, end = std::min(begin + block_particles, n);
         for (std::size_t i = begin; i < end; ++i) {
             const float x = a.x[i], y = a.y[i], z = a.z[i];
             if (inv_mass[i] == 0.0f) {
-                pred_x_[i] = b.x[i] = x;
-                pred_y_[i] = b.y[i] = y;
-                pred_z_[i] = b.z[i] = z;
+                pred_x[i] = b.x[i] = x;
+                pred_y[i] = b.y[i] = y;
+                pred_z[i] = b.z[i] = z;
                 continue;
             }
             float ex = 0.0f, ey = 0.0f, ez = 0.0f; // accelerations other than gravity
@@ -83,9 +239,9 @@ template <bool Parallel> void Simulation::implicit_step() {
                 ez += extra_fz_[i] * inv_mass[i];
             }
             const float vx = a.u[i], vy = a.v[i], vz = a.w[i];
-            pred_x_[i] = x + h * vx + h2 * (gx + ex);
-            pred_y_[i] = y + h * vy + h2 * (gy + ey);
-            pred_z_[i] = z + h * vz + h2 * (gz + ez);
+            pred_x[i] = x + h * vx + h2 * (gx + ex);
+            pred_y[i] = y + h * vy + h2 * (gy + ey);
+            pred_z[i] = z + h * vz + h2 * (gz + ez);
             float s = 0.0f;
             if (g2 > 0.0f) {
                 const float ax = (vx - b.u[i]) * inv_h, ay = (vy - b.v[i]) * inv_h, az = (vz - b.w[i]) * inv_h;
@@ -97,107 +253,17 @@ template <bool Parallel> void Simulation::implicit_step() {
         }
     });
 
-    // 2. Sweeps.
-    vbd::SweepArgs args{a.x.data(),     a.y.data(),   a.z.data(),   pred_x_.data(), pred_y_.data(),
-                        pred_z_.data(), b.x.data(),   b.y.data(),   b.z.data(),     inv_mass,
-                        &vbd_,          inv_h * inv_h, params_.air_drag * inv_h, inv_h};
-    const bool jacobi = ip.method == ImplicitMethod::jacobi;
-    const bool chebyshev = ip.chebyshev_rho > 0.0f;
-    const float rho2 = ip.chebyshev_rho * ip.chebyshev_rho;
-    float omega = 1.0f;
-    if (chebyshev) {
-        std::copy_n(b.x.data(), n, cheb1_x_.data());
-        std::copy_n(b.y.data(), n, cheb1_y_.data());
-        std::copy_n(b.z.data(), n, cheb1_z_.data());
-    }
-    implicit_stats_ = ImplicitStats{};
-    for (std::uint32_t it = 0; it < ip.iterations; ++it) {
-        std::size_t chunks_used = 0;
-        if (!jacobi) {
-            for (std::size_t c = 0; c < vbd_.colour_count(); ++c) {
-                const std::uint32_t first = vbd_.colour_offsets[c], last = vbd_.colour_offsets[c + 1];
-                const std::uint32_t base = colour_chunk_base_[c];
-                const std::size_t chunks = colour_chunk_base_[c + 1] - base;
-                for_each_index<Parallel>(chunks, [&](std::size_t ch) {
-                    double r = 0.0;
-                    const std::uint32_t lo = first + static_cast<std::uint32_t>(ch * vbd_chunk);
-                    const std::uint32_t hi = std::min<std::uint32_t>(last, lo + static_cast<std::uint32_t>(vbd_chunk));
-                    for (std::uint32_t k = lo; k < hi; ++k) {
-                        const std::uint32_t i = vbd_.colour_vertex[k];
-                        if (inv_mass[i] == 0.0f) continue;
-                        float out[3];
-                        r += vbd::solve_vertex(args, i, out);
-                        b.x[i] = out[0];
-                        b.y[i] = out[1];
-                        b.z[i] = out[2];
-                    }
-                    chunk_residual_[base + ch] = r;
-                });
-            }
-            chunks_used = colour_chunk_base_.back();
-        } else {
-            const std::size_t chunks = (n + vbd_chunk - 1) / vbd_chunk;
-            for_each_index<Parallel>(chunks, [&](std::size_t ch) {
-                double r = 0.0;
-                for (std::size_t i = ch * vbd_chunk, hi = std::min(n, (ch + 1) * vbd_chunk); i < hi; ++i) {
-                    if (inv_mass[i] == 0.0f) {
-                        jac_x_[i] = b.x[i];
-                        jac_y_[i] = b.y[i];
-                        jac_z_[i] = b.z[i];
-                        continue;
-                    }
-                    float out[3];
-                    r += vbd::solve_vertex(args, static_cast<std::uint32_t>(i), out);
-                    jac_x_[i] = out[0];
-                    jac_y_[i] = out[1];
-                    jac_z_[i] = out[2];
-                }
-                chunk_residual_[ch] = r;
-            });
-            std::copy_n(jac_x_.data(), n, b.x.data());
-            std::copy_n(jac_y_.data(), n, b.y.data());
-            std::copy_n(jac_z_.data(), n, b.z.data());
-            chunks_used = chunks;
-        }
-        double r2 = 0.0; // in chunk order: the same bits for any thread count
-        for (std::size_t ch = 0; ch < chunks_used; ++ch) r2 += chunk_residual_[ch];
-        const double r = std::sqrt(r2);
-        if (it == 0) implicit_stats_.first_residual = r;
-        implicit_stats_.last_residual = r;
-        implicit_stats_.iterations = it + 1;
+    // 2. The multilevel guess.
+    const bool multilevel = params_.implicit.multilevel && !is.coarse.empty();
+    if (multilevel) multilevel_guess<Parallel>();
 
-        if (chebyshev) {
-            // x^(k) = omega (xbar^(k) - x^(k-2)) + x^(k-2); omega_1 = 1, omega_2 = 2 / (2 - rho^2),
-            // omega_k = 4 / (4 - rho^2 omega_{k-1}).
-            omega = it == 0 ? 1.0f : it == 1 ? 2.0f / (2.0f - rho2) : 4.0f / (4.0f - rho2 * omega);
-            const float w = omega;
-            for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
-                const std::size_t begin = blk * block_particles, end = std::min(begin + block_particles, n);
-                for (std::size_t i = begin; i < end; ++i) {
-                    float px = b.x[i], py = b.y[i], pz = b.z[i];
-                    if (it > 0 && inv_mass[i] != 0.0f) {
-                        px = w * (px - cheb2_x_[i]) + cheb2_x_[i];
-                        py = w * (py - cheb2_y_[i]) + cheb2_y_[i];
-                        pz = w * (pz - cheb2_z_[i]) + cheb2_z_[i];
-                        b.x[i] = px;
-                        b.y[i] = py;
-                        b.z[i] = pz;
-                    }
-                    cheb2_x_[i] = cheb1_x_[i];
-                    cheb2_y_[i] = cheb1_y_[i];
-                    cheb2_z_[i] = cheb1_z_[i];
-                    cheb1_x_[i] = px;
-                    cheb1_y_[i] = py;
-                    cheb1_z_[i] = pz;
-                }
-            });
-        }
-        if (ip.tolerance > 0.0f && r <= double(ip.tolerance) * implicit_stats_.first_residual) break;
-    }
-    implicit_stats_.relative_residual =
-        implicit_stats_.first_residual > 0.0 ? implicit_stats_.last_residual / implicit_stats_.first_residual : 0.0;
+    // 3. Sweeps.
+    implicit_stats_ = is.fine.run<Parallel>({a.x.data(), a.y.data(), a.z.data(), b.x.data(), b.y.data(), b.z.data(),
+                                             inv_mass},
+                                            params_.implicit, h, params_.air_drag);
+    implicit_stats_.levels = multilevel ? static_cast<std::uint32_t>(1 + is.coarse.size()) : 1;
 
-    // 3. Velocities; finite check per block.
+    // 4. Velocities; finite check per block.
     for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
         const std::size_t begin = blk * block_particles, end = std::min(begin + block_particles, n);
         bool ok = true;

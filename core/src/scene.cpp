@@ -697,7 +697,24 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
     p.air_drag = static_cast<float>(ph.number("drag", 0.0, 100.0, " 1/s", p.air_drag));
     p.integrator = ph.text("integrator", {"euler", "verlet"}, "euler") == "verlet" ? Integrator::verlet
                                                                                  : Integrator::symplectic_euler;
+    p.solver = ph.text("solver", {"explicit", "implicit"}, "explicit") == "implicit" ? Solver::implicit
+                                                                                    : Solver::explicit_euler;
+    if (p.solver == Solver::implicit && p.integrator == Integrator::verlet)
+        ph.fail(ph.at("integrator"), "= \"verlet\" is a choice of the explicit solver only; " + ph.at("solver") +
+                                         " = \"implicit\" keeps velocities: use \"euler\" (or leave it out)");
     if (ph.has("dt")) s.dt = static_cast<float>(ph.number("dt", 1e-9, 0.1, " s", 0.0));
+    ObjectReader im = ph.object("implicit");
+    p.implicit.iterations = im.integer("iterations", 1, 1000, p.implicit.iterations);
+    p.implicit.tolerance = static_cast<float>(
+        im.number("tolerance", 0.0, 1.0, " (0 = run every iteration)", double(p.implicit.tolerance)));
+    const double rho = im.number("chebyshev_rho", 0.0, 1.0, " (1 excluded; 0 = no acceleration)", double(p.implicit.chebyshev_rho));
+    if (!(rho < 1.0))
+        im.fail(im.at("chebyshev_rho"), "= 1 is outside the allowed range [0, 1) (0 = no acceleration)");
+    p.implicit.chebyshev_rho = static_cast<float>(rho);
+    p.implicit.method = im.text("method", {"gauss_seidel", "jacobi"}, "gauss_seidel") == "jacobi"
+                            ? ImplicitMethod::jacobi
+                            : ImplicitMethod::gauss_seidel;
+    im.finish();
     ObjectReader wind = ph.object("wind");
     p.wind.enabled = wind.boolean("enabled", false);
     p.wind.strength = static_cast<float>(wind.number("strength", 0.0, 100.0, " m/s^2", p.wind.strength));
@@ -999,7 +1016,10 @@ BuiltScene build_scene(const SceneSpec& s) {
     const std::array<double, 3>& origin = out.cloth.origin;
     for (Collider& c : out.params.colliders)
         c = translated(c, {-origin[0], -origin[1], -origin[2]});
-    out.params.dt = s.dt ? *s.dt : static_cast<float>(default_dt(out.cloth, out.params));
+    // The implicit solver's default step is a frame (any length is stable); the explicit one's 0.9 x the bound.
+    out.params.dt = s.dt                                     ? *s.dt
+                    : out.params.solver == Solver::implicit ? implicit_default_dt
+                                                            : static_cast<float>(default_dt(out.cloth, out.params));
     if (s.state) apply_state(*s.state, out);
     return out;
 }

@@ -209,6 +209,12 @@ SceneBuild build_hang_scene(const HangParams& p) {
     if (fabric) {
         set_bending(out.cloth, grid_bending_elements(n, n, h, p.fabric.bend_u, p.fabric.bend_v), p.fabric.damping);
         out.cloth.bending.grid = grid_bending_weights(h, p.fabric.bend_u, p.fabric.bend_v);
+        // The same fabric, pins and placement on a coarser grid (the implicit solver's coarse levels).
+        out.cloth.coarsen = [p](std::uint32_t coarse_n) {
+            HangParams q = p;
+            q.n = coarse_n;
+            return build_hang_scene(q).cloth;
+        };
     }
     out.cloth.origin = {double(p.centre[0]), double(p.centre[1]), double(p.centre[2])};
     // Triangles: two per grid cell, counter-clockwise seen from +y (horizontal) or +z (vertical).

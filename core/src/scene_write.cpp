@@ -229,8 +229,14 @@ std::string to_json(const SceneSpec& s, const SceneState* state, const std::file
     sl.add("ratio", num(p.strain_limit.ratio)).add("passes", num(p.strain_limit.passes))
         .add("every", num(p.strain_limit.every));
     ph.add("gravity", vec(p.gravity)).add("drag", num(p.air_drag))
-        .add("integrator", str(p.integrator == Integrator::verlet ? "verlet" : "euler"));
+        .add("integrator", str(p.integrator == Integrator::verlet ? "verlet" : "euler"))
+        .add("solver", str(solver_name(p.solver)));
     if (s.dt) ph.add("dt", num(*s.dt));
+    Fields im;
+    im.add("iterations", num(p.implicit.iterations)).add("tolerance", num(p.implicit.tolerance))
+        .add("chebyshev_rho", num(p.implicit.chebyshev_rho))
+        .add("method", str(p.implicit.method == ImplicitMethod::jacobi ? "jacobi" : "gauss_seidel"));
+    ph.add("implicit", im.object());
     ph.add("wind", wind.object()).add("aero", aero.object()).add("strain_limit", sl.object());
     out += "  \"physics\": " + ph.object() + ",\n";
     out += "  \"colliders\": [";

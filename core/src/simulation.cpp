@@ -6,7 +6,7 @@
 #include <string>
 
 #include "drape/stability.hpp"
-#include "vbd.hpp"
+#include "implicit_solver.hpp"
 
 namespace drape {
 
@@ -194,7 +194,10 @@ void Simulation::set_material(SpringKind kind, SpringMaterial material) {
         apply_materials(cloth_, previous);
         throw;
     }
-    if (!vbd_.colour_offsets.empty()) vbd::refresh_materials(vbd_, cloth_);
+    if (implicit_) {
+        vbd::refresh_materials(implicit_->fine.graph(), cloth_);
+        // Coarse levels keep the fabric's own constants (a user's spring material applies to the cloth itself).
+    }
     monitor_.init(cloth_, params_);
     rebaseline_ = true;
 }

@@ -2,7 +2,10 @@
 #include "vbd.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
+
+#include "for_each_index.hpp"
 
 namespace drape::vbd {
 
@@ -101,5 +104,127 @@ VbdGraph cook(const Cloth& cloth) {
     for (std::uint32_t i = 0; i < n; ++i) g.colour_vertex[fill[colour[i]]++] = i;
     return g;
 }
+
+namespace {
+constexpr std::size_t vbd_chunk = 256; ///< vertices per parallel chunk of a colour (fixed: determinism)
+}
+
+void Solver::cook(const Cloth& cloth) {
+    graph_ = vbd::cook(cloth);
+    const std::size_t n = cloth.particle_count;
+    for (std::vector<float>* a : {&pred_x_, &pred_y_, &pred_z_, &cheb1_x_, &cheb1_y_, &cheb1_z_, &cheb2_x_, &cheb2_y_,
+                                  &cheb2_z_, &jac_x_, &jac_y_, &jac_z_})
+        a->assign(n, 0.0f);
+    colour_chunk_base_.assign(graph_.colour_count() + 1, 0);
+    for (std::size_t c = 0; c < graph_.colour_count(); ++c) {
+        const std::size_t size = graph_.colour_offsets[c + 1] - graph_.colour_offsets[c];
+        colour_chunk_base_[c + 1] =
+            colour_chunk_base_[c] + static_cast<std::uint32_t>((size + vbd_chunk - 1) / vbd_chunk);
+    }
+    const std::size_t jacobi_chunks = (n + vbd_chunk - 1) / vbd_chunk;
+    chunk_residual_.assign(std::max<std::size_t>(colour_chunk_base_.back(), jacobi_chunks), 0.0);
+}
+
+template <bool Parallel>
+ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float h, float air_drag) {
+    const std::size_t n = graph_.particle_count;
+    const float inv_h = 1.0f / h;
+    const float* inv_mass = st.inv_mass;
+    float *x = st.x, *y = st.y, *z = st.z;
+    const SweepArgs args{st.x0,         st.y0,         st.z0, pred_x_.data(), pred_y_.data(), pred_z_.data(), x, y, z,
+                         inv_mass,      &graph_,       inv_h * inv_h, air_drag * inv_h, inv_h};
+    const bool jacobi = ip.method == ImplicitMethod::jacobi;
+    const bool chebyshev = ip.chebyshev_rho > 0.0f;
+    const float rho2 = ip.chebyshev_rho * ip.chebyshev_rho;
+    const std::size_t blocks = (n + block_particles - 1) / block_particles;
+    float omega = 1.0f;
+    if (chebyshev) {
+        std::copy_n(x, n, cheb1_x_.data());
+        std::copy_n(y, n, cheb1_y_.data());
+        std::copy_n(z, n, cheb1_z_.data());
+    }
+    ImplicitStats stats;
+    for (std::uint32_t it = 0; it < ip.iterations; ++it) {
+        std::size_t chunks_used = 0;
+        if (!jacobi) {
+            for (std::size_t c = 0; c < graph_.colour_count(); ++c) {
+                const std::uint32_t first = graph_.colour_offsets[c], last = graph_.colour_offsets[c + 1];
+                const std::uint32_t base = colour_chunk_base_[c];
+                for_each_index<Parallel>(colour_chunk_base_[c + 1] - base, [&](std::size_t ch) {
+                    double r = 0.0;
+                    const std::uint32_t lo = first + static_cast<std::uint32_t>(ch * vbd_chunk);
+                    const std::uint32_t hi = std::min<std::uint32_t>(last, lo + static_cast<std::uint32_t>(vbd_chunk));
+                    for (std::uint32_t k = lo; k < hi; ++k) {
+                        const std::uint32_t i = graph_.colour_vertex[k];
+                        if (inv_mass[i] == 0.0f) continue;
+                        float out[3];
+                        r += solve_vertex(args, i, out);
+                        x[i] = out[0];
+                        y[i] = out[1];
+                        z[i] = out[2];
+                    }
+                    chunk_residual_[base + ch] = r;
+                });
+            }
+            chunks_used = colour_chunk_base_.back();
+        } else {
+            const std::size_t chunks = (n + vbd_chunk - 1) / vbd_chunk;
+            for_each_index<Parallel>(chunks, [&](std::size_t ch) {
+                double r = 0.0;
+                for (std::size_t i = ch * vbd_chunk, hi = std::min(n, (ch + 1) * vbd_chunk); i < hi; ++i) {
+                    float out[3] = {x[i], y[i], z[i]};
+                    if (inv_mass[i] != 0.0f) r += solve_vertex(args, static_cast<std::uint32_t>(i), out);
+                    jac_x_[i] = out[0];
+                    jac_y_[i] = out[1];
+                    jac_z_[i] = out[2];
+                }
+                chunk_residual_[ch] = r;
+            });
+            std::copy_n(jac_x_.data(), n, x);
+            std::copy_n(jac_y_.data(), n, y);
+            std::copy_n(jac_z_.data(), n, z);
+            chunks_used = chunks;
+        }
+        double r2 = 0.0; // in chunk order: the same bits for any thread count
+        for (std::size_t ch = 0; ch < chunks_used; ++ch) r2 += chunk_residual_[ch];
+        const double r = std::sqrt(r2);
+        if (it == 0) stats.first_residual = r;
+        stats.last_residual = r;
+        stats.iterations = it + 1;
+
+        if (chebyshev) {
+            // x^(k) = omega (xbar^(k) - x^(k-2)) + x^(k-2); omega_1 = 1, omega_2 = 2 / (2 - rho^2),
+            // omega_k = 4 / (4 - rho^2 omega_{k-1}).
+            omega = it == 0 ? 1.0f : it == 1 ? 2.0f / (2.0f - rho2) : 4.0f / (4.0f - rho2 * omega);
+            const float w = omega;
+            for_each_index<Parallel>(blocks, [&](std::size_t blk) {
+                const std::size_t begin = blk * block_particles, end = std::min(begin + block_particles, n);
+                for (std::size_t i = begin; i < end; ++i) {
+                    float px = x[i], py = y[i], pz = z[i];
+                    if (it > 0 && inv_mass[i] != 0.0f) {
+                        px = w * (px - cheb2_x_[i]) + cheb2_x_[i];
+                        py = w * (py - cheb2_y_[i]) + cheb2_y_[i];
+                        pz = w * (pz - cheb2_z_[i]) + cheb2_z_[i];
+                        x[i] = px;
+                        y[i] = py;
+                        z[i] = pz;
+                    }
+                    cheb2_x_[i] = cheb1_x_[i];
+                    cheb2_y_[i] = cheb1_y_[i];
+                    cheb2_z_[i] = cheb1_z_[i];
+                    cheb1_x_[i] = px;
+                    cheb1_y_[i] = py;
+                    cheb1_z_[i] = pz;
+                }
+            });
+        }
+        if (ip.tolerance > 0.0f && r <= double(ip.tolerance) * stats.first_residual) break;
+    }
+    stats.relative_residual = stats.first_residual > 0.0 ? stats.last_residual / stats.first_residual : 0.0;
+    return stats;
+}
+
+template ImplicitStats Solver::run<true>(const LevelState&, const ImplicitParams&, float, float);
+template ImplicitStats Solver::run<false>(const LevelState&, const ImplicitParams&, float, float);
 
 } // namespace drape::vbd

@@ -18,6 +18,40 @@ VbdGraph cook(const Cloth& cloth);
 /// Refreshes the springs' k and kd from the cloth's materials (after Simulation::set_material).
 void refresh_materials(VbdGraph& graph, const Cloth& cloth);
 
+/// The arrays one level's sweeps work on (particle_count entries each).
+struct LevelState {
+    const float* x0; ///< x^n
+    const float* y0;
+    const float* z0;
+    float* x; ///< in: the initial guess; out: the result
+    float* y;
+    float* z;
+    const float* inv_mass; ///< 0 = fixed at x^n
+};
+
+/// The sweeps of one cloth (one level of the multilevel solve, or the only one): its cooked graph and scratch.
+class Solver {
+  public:
+    void cook(const Cloth& cloth);
+    bool cooked() const noexcept { return !graph_.colour_offsets.empty(); }
+    VbdGraph& graph() noexcept { return graph_; }
+    const VbdGraph& graph() const noexcept { return graph_; }
+    /// The inertial prediction y, to fill before run() (particle_count entries each).
+    float* pred_x() noexcept { return pred_x_.data(); }
+    float* pred_y() noexcept { return pred_y_.data(); }
+    float* pred_z() noexcept { return pred_z_.data(); }
+    /// Runs the sweeps of one step of length h with air drag kr (1/s). No allocation.
+    template <bool Parallel>
+    ImplicitStats run(const LevelState& s, const ImplicitParams& params, float h, float air_drag);
+
+  private:
+    VbdGraph graph_;
+    std::vector<float> pred_x_, pred_y_, pred_z_, cheb1_x_, cheb1_y_, cheb1_z_, cheb2_x_, cheb2_y_, cheb2_z_;
+    std::vector<float> jac_x_, jac_y_, jac_z_;
+    std::vector<double> chunk_residual_;          ///< per fixed chunk of a sweep: sum of |g_i|^2
+    std::vector<std::uint32_t> colour_chunk_base_; ///< per colour: its first chunk in chunk_residual_
+};
+
 /// Everything one sweep reads: the state at the start of the step, the inertial prediction, the iterate.
 struct SweepArgs {
     const float* __restrict x0; ///< x^n
@@ -48,6 +82,11 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
     float gy = mi * (yi - a.py[i]) + md * dyi;
     float gz = mi * (zi - a.pz[i]) + md * dzi;
     float hxx = mi + md, hyy = hxx, hzz = hxx, hxy = 0.0f, hxz = 0.0f, hyz = 0.0f;
+    // The terms quadratic in x_i (inertia, drag, damping, bending) are tracked apart from the springs' stretch:
+    // G restricted to x_i is then exactly qg . d + 1/2 d^T QH d + sum of the springs' stretch energies, which the
+    // line search below evaluates. QH is diagonal-free here: qh_* hold the quadratic terms' Hessian.
+    float qhxx = hxx, qhyy = hxx, qhzz = hxx, qhxy = 0.0f, qhxz = 0.0f, qhyz = 0.0f;
+    float sgx = 0.0f, sgy = 0.0f, sgz = 0.0f; // the springs' stretch gradient
     // Springs: E = k/2 (L - l)^2, grad_i = -k (L - l) u (u from i to j); projected Hessian k (c I + (1 - c) u u^T),
     // c = max(0, 1 - l/L). Damping along n, the direction at the start of the step: grad_i = -(kd/h) (dd . n) n,
     // dd = (x_j - x_j^n) - (x_i - x_i^n); Hessian (kd/h) n n^T.
@@ -61,9 +100,9 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
             const float len = len2 * inv_len;
             const float ux = dx * inv_len, uy = dy * inv_len, uz = dz * inv_len;
             const float s = k * (len - l);
-            gx -= s * ux;
-            gy -= s * uy;
-            gz -= s * uz;
+            sgx -= s * ux;
+            sgy -= s * uy;
+            sgz -= s * uz;
             const float c = k * std::max(0.0f, 1.0f - l * inv_len), cu = k - c;
             hxx += c + cu * ux * ux;
             hyy += c + cu * uy * uy;
@@ -89,12 +128,12 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
                 gy -= p * ny;
                 gz -= p * nz;
                 const float q = kd * inv_n2;
-                hxx += q * nx * nx;
-                hyy += q * ny * ny;
-                hzz += q * nz * nz;
-                hxy += q * nx * ny;
-                hxz += q * nx * nz;
-                hyz += q * ny * nz;
+                qhxx += q * nx * nx;
+                qhyy += q * ny * ny;
+                qhzz += q * nz * nz;
+                qhxy += q * nx * ny;
+                qhxz += q * nx * nz;
+                qhyz += q * ny * nz;
             }
         }
     }
@@ -114,18 +153,54 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
         gy += by;
         gz += bz;
         const float d = g.bend_diag[i] * (1.0f + bh);
-        hxx += d;
-        hyy += d;
-        hzz += d;
+        qhxx += d;
+        qhyy += d;
+        qhzz += d;
     }
+    // Total: quadratic terms plus the springs' stretch (hxx.. so far hold inertia + the springs' projected Hessian).
+    hxx += qhxx - (mi + md);
+    hyy += qhyy - (mi + md);
+    hzz += qhzz - (mi + md);
+    hxy += qhxy;
+    hxz += qhxz;
+    hyz += qhyz;
+    const float qgx = gx, qgy = gy, qgz = gz; // gradient of the quadratic terms
+    gx += sgx;
+    gy += sgy;
+    gz += sgz;
     // x_i -= H^-1 g by the adjugate (H is symmetric positive definite: the inertia term alone is m/h^2 I).
     const float c00 = hyy * hzz - hyz * hyz, c01 = hxz * hyz - hxy * hzz, c02 = hxy * hyz - hxz * hyy;
     const float c11 = hxx * hzz - hxz * hxz, c12 = hxy * hxz - hxx * hyz, c22 = hxx * hyy - hxy * hxy;
     const float det = hxx * c00 + hxy * c01 + hxz * c02;
     const float inv_det = 1.0f / det;
-    out[0] = xi - (c00 * gx + c01 * gy + c02 * gz) * inv_det;
-    out[1] = yi - (c01 * gx + c11 * gy + c12 * gz) * inv_det;
-    out[2] = zi - (c02 * gx + c12 * gy + c22 * gz) * inv_det;
+    float ddx = -(c00 * gx + c01 * gy + c02 * gz) * inv_det;
+    float ddy = -(c01 * gx + c11 * gy + c12 * gz) * inv_det;
+    float ddz = -(c02 * gx + c12 * gy + c22 * gz) * inv_det;
+    // Backtracking line search on the local objective (the projected Hessian makes the step a descent direction,
+    // but a vertex between nearly parallel springs can overshoot far): halve the step until G does not rise.
+    // In double, as differences (close to convergence the change is far below float's resolution of G).
+    auto change = [&](double px, double py, double pz) {
+        double e = qgx * px + qgy * py + qgz * pz +
+                   0.5 * (double(qhxx) * px * px + double(qhyy) * py * py + double(qhzz) * pz * pz) +
+                   double(qhxy) * px * py + double(qhxz) * px * pz + double(qhyz) * py * pz;
+        for (std::uint32_t s = g.spring_offsets[i], end = g.spring_offsets[i + 1]; s < end; ++s) {
+            const std::uint32_t j = g.spring_neighbour[s];
+            const double dx = double(a.x[j]) - xi, dy = double(a.y[j]) - yi, dz = double(a.z[j]) - zi;
+            const double l0 = std::sqrt(dx * dx + dy * dy + dz * dz);
+            const double l1 = std::sqrt((dx - px) * (dx - px) + (dy - py) * (dy - py) + (dz - pz) * (dz - pz));
+            e += 0.5 * double(g.spring_k[s]) * (l1 - l0) * (l1 + l0 - 2.0 * double(g.spring_rest[s]));
+        }
+        return e;
+    };
+    for (int halving = 0; halving < 8 && change(ddx, ddy, ddz) > 0.0; ++halving) {
+        ddx *= 0.5f;
+        ddy *= 0.5f;
+        ddz *= 0.5f;
+        if (halving == 7) ddx = ddy = ddz = 0.0f;
+    }
+    out[0] = xi + ddx;
+    out[1] = yi + ddy;
+    out[2] = zi + ddz;
     return gx * gx + gy * gy + gz * gz;
 }
 

@@ -9,6 +9,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -95,6 +96,10 @@ struct Cloth {
     /// at 1000 m behaves as at the origin); world position = origin + stored position, added back (in double)
     /// only where absolute positions are shown (OBJ export, the run's JSON).
     std::array<double, 3> origin{0.0, 0.0, 0.0};
+    /// For a square grid cloth of the fabric model: builds the same fabric, pins and placement on an n x n grid
+    /// (the implicit solver's coarse levels, implicit.hpp); empty when the cloth cannot be rebuilt so (the springs
+    /// model, whose constants are per spring, and meshes).
+    std::function<Cloth(std::uint32_t n)> coarsen;
 
     std::size_t block_count() const noexcept { return (padded_count + block_particles - 1) / block_particles; }
     std::size_t spring_count() const noexcept { return edges.size(); }

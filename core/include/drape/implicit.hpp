@@ -27,6 +27,9 @@ enum class Solver : std::uint8_t {
 };
 const char* solver_name(Solver solver) noexcept; ///< "explicit" / "implicit"
 
+/// The implicit step when a scene or flag gives none: one frame at 30 FPS, s.
+inline constexpr float implicit_default_dt = 1.0f / 30.0f;
+
 /// Iteration method of the implicit solver.
 enum class ImplicitMethod : std::uint8_t {
     gauss_seidel, ///< vertex block descent: colours in order, each vertex sees its neighbours' newest positions
@@ -40,6 +43,9 @@ struct ImplicitParams {
     /// Chebyshev acceleration's estimate of the sweep's spectral radius, [0, 1); 0 = off.
     float chebyshev_rho = 0.9f;
     ImplicitMethod method = ImplicitMethod::gauss_seidel;
+    /// On a grid cloth of the fabric model: start each step from the same step solved on coarser grids of the same
+    /// fabric (coarsest first, each level's displacement interpolated onto the next as its initial guess).
+    bool multilevel = true;
 };
 
 /// Figures of the last implicit step.
@@ -50,6 +56,7 @@ struct ImplicitStats {
     double relative_residual = 0.0;
     double first_residual = 0.0;   ///< N, the first sweep's sqrt(sum |g_i|^2)
     double last_residual = 0.0;    ///< N
+    std::uint32_t levels = 1;      ///< grids solved this step (1 + coarse levels)
 };
 
 /// Cooked for vertex block descent (built once per cloth): every energy term a vertex takes part in, and the vertex

@@ -14,6 +14,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -30,6 +31,7 @@ namespace drape {
 namespace kernels {
 struct StepContext;
 }
+struct ImplicitSolver;
 
 enum class Integrator : std::uint8_t {
     symplectic_euler, ///< v' = v + a dt, x' = x + v' dt (001 eqs 9-10)
@@ -120,6 +122,9 @@ class Simulation {
     /// Validates every parameter and the time step against the stability bound; throws InvalidInput naming the
     /// parameter and the allowed range. Allocates all state and scratch here, never in step().
     Simulation(Cloth cloth, const InitialState& initial, const SimulationParams& params);
+    ~Simulation();
+    Simulation(Simulation&&) noexcept;
+    Simulation& operator=(Simulation&&) noexcept;
 
     /// Advances `count` steps of params().dt: explicit substeps, or implicit steps (params().solver). Parallel over fixed particle blocks with oneTBB (the thread
     /// count is the caller's: call it inside drape::Workers::run, workers.hpp). Throws SimulationError naming
@@ -180,8 +185,8 @@ class Simulation {
 
     /// Figures of the last implicit step (iterations, residual); zeros before the first.
     const ImplicitStats& implicit_stats() const noexcept { return implicit_stats_; }
-    /// The implicit solver's cooked data (empty until the implicit solver is first chosen).
-    const VbdGraph& vbd_graph() const noexcept { return vbd_; }
+    /// The implicit solver's cooked data of the cloth itself (empty until the implicit solver is first chosen).
+    const VbdGraph& vbd_graph() const noexcept;
 
     /// Direct access for tests and benchmarks (current buffer and the cooked data).
     const StateBuffer& state() const noexcept { return cur(); }
@@ -207,14 +212,9 @@ class Simulation {
     template <bool Parallel> void implicit_step();
     /// Cooks the implicit solver's graph and scratch (when first chosen).
     void cook_implicit();
-    VbdGraph vbd_;
+    template <bool Parallel> void multilevel_guess();
+    std::unique_ptr<ImplicitSolver> implicit_; ///< cooked when the implicit solver is first chosen (implicit_solver.hpp)
     ImplicitStats implicit_stats_;
-    // Implicit scratch, particle_count each: the inertial prediction y; Chebyshev's two previous iterates; Jacobi's
-    // new positions.
-    std::vector<float> pred_x_, pred_y_, pred_z_, cheb1_x_, cheb1_y_, cheb1_z_, cheb2_x_, cheb2_y_, cheb2_z_;
-    std::vector<float> jac_x_, jac_y_, jac_z_;
-    std::vector<double> chunk_residual_;         ///< per fixed chunk of a sweep: sum of |g_i|^2
-    std::vector<std::uint32_t> colour_chunk_base_; ///< per colour: its first chunk in chunk_residual_
     kernels::StepContext make_context(std::size_t step_index);
     KernelPath resolve_params(const SimulationParams& params) const;
     void check_blocks(std::size_t step_index);

@@ -1,0 +1,35 @@
+// The implicit solver's state (owned by Simulation): the sweeps of the cloth itself and, for a grid cloth of the
+// fabric model, a hierarchy of the same fabric on coarser grids that gives each step a coarse-to-fine initial guess
+// (docs/implicit.md, "Multilevel initial guess").
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "drape/cloth.hpp"
+#include "vbd.hpp"
+
+namespace drape {
+
+/// One coarser grid of the same fabric (Cloth::coarsen), with its own state for the current step.
+struct CoarseLevel {
+    Cloth cloth;
+    vbd::Solver solver;
+    std::uint32_t columns = 0, rows = 0;
+    std::vector<float> x0, y0, z0;    ///< x^n, sampled from the cloth's state
+    std::vector<float> vx, vy, vz;    ///< v^n, sampled (then the collide pass's scratch)
+    std::vector<float> gx, gy, gz;    ///< the cloth's own initial guess, sampled (fixed nodes: x^n)
+    std::vector<float> x, y, z;       ///< the iterate
+    std::vector<float> inv_mass;      ///< this step's: 0 where the nearest particle of the cloth is fixed
+    std::vector<float> free_inv_mass; ///< the level's own masses
+    std::vector<std::uint32_t> nearest; ///< per node: the nearest particle of the cloth (pins, grabs)
+};
+
+struct ImplicitSolver {
+    vbd::Solver fine;
+    std::vector<CoarseLevel> coarse; ///< finer first
+    std::uint32_t columns = 0, rows = 0; ///< the cloth's grid (when it has coarse levels)
+    std::vector<float> corr_x, corr_y, corr_z; ///< the finest coarse level's correction, sampled onto the cloth
+};
+
+} // namespace drape

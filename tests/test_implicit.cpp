@@ -1,0 +1,295 @@
+// The implicit solver (implicit.hpp, docs/implicit.md): vertex block descent with the multilevel guess.
+//   - the colouring is a valid Gauss-Seidel partition (no energy term couples two vertices of a colour);
+//   - the settled shape equals the explicit solver's static equilibrium (a sheet with a unique equilibrium);
+//   - serial twin and every thread count give the same bits; no allocation in a step (test_no_allocation.cpp);
+//   - the multilevel guess and Chebyshev bring an iterate closer to the converged step than plain sweeps;
+//   - large steps and stiff fabrics stay finite; pins hold, a grab moves its particle, colliders push out.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "drape/implicit_reference.hpp"
+#include "drape/scene.hpp"
+#include "drape/scene_hang.hpp"
+#include "drape/simulation.hpp"
+#include "drape/stability.hpp"
+#include "drape/workers.hpp"
+
+using namespace drape;
+
+namespace {
+
+HangParams fabric_hang(std::uint32_t n, const char* fabric = "wool") {
+    HangParams hp;
+    hp.n = n;
+    hp.model = MaterialModel::fabric;
+    hp.fabric = *find_fabric(fabric);
+    hp.pin_radius = 0.02f;
+    return hp;
+}
+
+SimulationParams implicit_params(float dt, std::uint32_t iterations) {
+    SimulationParams p;
+    p.solver = Solver::implicit;
+    p.dt = dt;
+    p.implicit.iterations = iterations;
+    return p;
+}
+
+double max_distance(const Simulation& a, const Simulation& b) {
+    double worst = 0.0;
+    for (std::size_t i = 0; i < a.x().size(); ++i) {
+        const double dx = a.x()[i] - b.x()[i], dy = a.y()[i] - b.y()[i], dz = a.z()[i] - b.z()[i];
+        worst = std::max(worst, std::sqrt(dx * dx + dy * dy + dz * dz));
+    }
+    return worst;
+}
+
+void expect_valid_colouring(const Cloth& cloth, const VbdGraph& g) {
+    const std::size_t n = cloth.particle_count;
+    std::vector<std::uint32_t> colour(n, UINT32_MAX);
+    for (std::size_t c = 0; c < g.colour_count(); ++c)
+        for (std::uint32_t k = g.colour_offsets[c]; k < g.colour_offsets[c + 1]; ++k) {
+            ASSERT_EQ(colour[g.colour_vertex[k]], UINT32_MAX) << "vertex in two colours";
+            colour[g.colour_vertex[k]] = static_cast<std::uint32_t>(c);
+        }
+    for (std::uint32_t c : colour) ASSERT_NE(c, UINT32_MAX) << "vertex in no colour";
+    for (const Edge& e : cloth.edges) EXPECT_NE(colour[e.a], colour[e.b]) << "spring " << e.a << "-" << e.b;
+    for (const BendElement& e : cloth.bending.elements)
+        for (int p = 0; p < 4; ++p)
+            for (int q = p + 1; q < 4; ++q)
+                if (e.c[p] != 0.0f && e.c[q] != 0.0f && e.v[p] != e.v[q]) {
+                    EXPECT_NE(colour[e.v[p]], colour[e.v[q]]) << "bending element " << e.v[p] << "-" << e.v[q];
+                }
+}
+
+} // namespace
+
+TEST(Implicit, ColouringSeparatesEveryCoupledPair) {
+    SceneBuild grid = build_hang_scene(fabric_hang(40));
+    Simulation a(grid.cloth, grid.initial, implicit_params(1.0f / 30.0f, 2));
+    expect_valid_colouring(grid.cloth, a.vbd_graph());
+    EXPECT_LE(a.vbd_graph().colour_count(), 12u); // a grid with +-2 bending neighbours: 9 colours suffice
+    // A sewn garment: hinge bending, seams (springs across panels).
+    SceneSpec shirt = load_scene("tshirt");
+    shirt.tshirt.cells_per_metre = 30;
+    shirt.physics.solver = Solver::implicit;
+    shirt.dt = 1.0f / 30.0f;
+    BuiltScene b = build_scene(shirt);
+    Simulation s(b.cloth, b.initial, b.params);
+    expect_valid_colouring(b.cloth, s.vbd_graph());
+}
+
+// A sheet pinned along its top edge has one equilibrium: the implicit solver must settle onto the explicit one's.
+TEST(Implicit, SettlesOnTheExplicitStaticEquilibrium) {
+    HangParams hp = fabric_hang(32);
+    hp.pins = GridPins::top_edge;
+    hp.plane = GridPlane::vertical;
+    hp.pin_radius = 0.0f;
+    SceneBuild scene = build_hang_scene(hp);
+    SimulationParams pe;
+    pe.air_drag = 3.0f;
+    pe.dt = static_cast<float>(default_dt(scene.cloth, pe.air_drag));
+    SimulationParams pi = implicit_params(0.1f, 10);
+    pi.air_drag = 3.0f;
+    Simulation e(scene.cloth, scene.initial, pe), im(scene.cloth, scene.initial, pi);
+    e.step(static_cast<std::size_t>(6.0 / pe.dt));
+    im.step(60);
+    ASSERT_TRUE(e.health().finite && im.health().finite);
+    EXPECT_LT(e.health().kinetic_energy, 1e-6);
+    EXPECT_LT(max_distance(e, im), 1e-4) << "m"; // measured 1.7e-6 m
+    // The settled sheet really hangs (it is not the flat start).
+    double sag = 0.0;
+    for (std::size_t i = 0; i < scene.initial.y.size(); ++i) sag = std::max(sag, double(scene.initial.y[i] - im.y()[i]));
+    EXPECT_GT(sag, 1e-4);
+}
+
+TEST(Implicit, SameBitsSeriallyAndAtEveryWorkerCount) {
+    auto run = [](int workers, bool serial) {
+        Workers arena(workers);
+        return arena.run([&] {
+            SceneBuild scene = build_hang_scene(fabric_hang(72)); // 5 blocks, 4 coarse levels
+            SimulationParams p = implicit_params(1.0f / 30.0f, 6);
+            p.wind.enabled = true;
+            p.strain_limit.ratio = 0.1f;
+            p.colliders = {make_sphere({0.0f, -0.3f, 0.0f}, 0.2f)};
+            Simulation sim(std::move(scene.cloth), scene.initial, p);
+            serial ? sim.step_serial(12) : sim.step(12);
+            EXPECT_TRUE(sim.health().finite);
+            EXPECT_GT(sim.implicit_stats().levels, 1u);
+            return sim.checksum();
+        });
+    };
+    const std::uint64_t serial = run(1, true);
+    for (int w : {1, 2, 3, 8}) EXPECT_EQ(serial, run(w, false)) << w << " workers";
+}
+
+namespace {
+
+/// A hang cloth moving (falling and swinging) after `steps` implicit steps, as an initial state.
+InitialState moving_state(const SceneBuild& scene, std::size_t steps) {
+    Simulation moving(scene.cloth, scene.initial, implicit_params(1.0f / 30.0f, 20));
+    moving.step(steps);
+    InitialState s = scene.initial;
+    s.x.assign(moving.x().begin(), moving.x().end());
+    s.y.assign(moving.y().begin(), moving.y().end());
+    s.z.assign(moving.z().begin(), moving.z().end());
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+        const auto v = moving.velocity(i);
+        s.vx[i] = v[0];
+        s.vy[i] = v[1];
+        s.vz[i] = v[2];
+    }
+    return s;
+}
+
+/// One implicit step of the cloth from s with these settings.
+Simulation one_step(const SceneBuild& scene, const InitialState& s, std::uint32_t iterations, bool multilevel,
+                    float rho, ImplicitMethod method = ImplicitMethod::gauss_seidel) {
+    SimulationParams p = implicit_params(1.0f / 30.0f, iterations);
+    p.implicit.multilevel = multilevel;
+    p.implicit.chebyshev_rho = rho;
+    p.implicit.method = method;
+    Simulation sim(scene.cloth, s, p);
+    sim.step(1);
+    return sim;
+}
+
+/// G of the step from s (implicit_reference.hpp) at a simulation's positions.
+struct Objective {
+    const SceneBuild& scene;
+    const InitialState& s;
+    std::vector<float> ax, ay, az;
+    Objective(const SceneBuild& sc, const InitialState& st)
+        : scene(sc), s(st), ax(st.x.size(), 0.0f), ay(st.x.size(), -9.81f), az(st.x.size(), 0.0f) {}
+    ImplicitProblem problem() const {
+        ImplicitProblem p;
+        p.cloth = &scene.cloth;
+        p.h = 1.0 / 30.0;
+        p.air_drag = SimulationParams{}.air_drag;
+        p.x0 = s.x;
+        p.y0 = s.y;
+        p.z0 = s.z;
+        p.vx = s.vx;
+        p.vy = s.vy;
+        p.vz = s.vz;
+        p.ax = ax;
+        p.ay = ay;
+        p.az = az;
+        return p;
+    }
+    double operator()(const Simulation& sim) const {
+        std::vector<double> x(3 * sim.x().size());
+        for (std::size_t i = 0; i < sim.x().size(); ++i) {
+            x[3 * i] = sim.x()[i];
+            x[3 * i + 1] = sim.y()[i];
+            x[3 * i + 2] = sim.z()[i];
+        }
+        return implicit_objective(problem(), x);
+    }
+};
+
+} // namespace
+
+// Plain vertex block descent (no multilevel guess, no Chebyshev) lowers G at every sweep (each vertex's step is
+// line-searched on G), and with enough sweeps reaches the exact reference's minimum.
+TEST(Implicit, EnergyFallsEverySweepAndReachesTheReferenceMinimum) {
+    const SceneBuild scene = build_hang_scene(fabric_hang(16));
+    const InitialState s = moving_state(scene, 4);
+    const Objective G(scene, s);
+    double previous = G(one_step(scene, s, 1, false, 0.0f));
+    const double first = previous;
+    for (std::uint32_t k = 2; k <= 30; ++k) {
+        const double g = G(one_step(scene, s, k, false, 0.0f));
+        EXPECT_LE(g, previous + 1e-12 * std::fabs(previous)) << "sweep " << k;
+        previous = g;
+    }
+    const NewtonResult ref = newton_reference(G.problem(), {}, 1e-10, 50);
+    ASSERT_TRUE(ref.converged);
+    const Simulation vbd = one_step(scene, s, 300, true, 0.9f);
+    const double gap = (G(vbd) - ref.objective) / (first - ref.objective);
+    double distance = 0.0;
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+        const double dx = vbd.x()[i] - ref.x[3 * i], dy = vbd.y()[i] - ref.x[3 * i + 1], dz = vbd.z()[i] - ref.x[3 * i + 2];
+        distance = std::max(distance, std::sqrt(dx * dx + dy * dy + dz * dz));
+    }
+    std::printf("[ vbd vs reference ] G after 1 sweep %.9g J, reference minimum %.9g J, 300 sweeps: relative gap %.3g, "
+                "max distance %.3g m\n",
+                first, ref.objective, gap, distance);
+    EXPECT_LT(gap, 1e-3);
+    EXPECT_LT(distance, 1e-4);
+}
+
+// After 10 sweeps of one step from a moving state, G is lower with the multilevel guess than without, and lower
+// with Chebyshev than without; Jacobi is the slowest.
+TEST(Implicit, AccelerationsLowerTheEnergyFaster) {
+    const SceneBuild scene = build_hang_scene(fabric_hang(40));
+    const InitialState s = moving_state(scene, 8);
+    const Objective G(scene, s);
+    const double plain = G(one_step(scene, s, 10, false, 0.0f));
+    const double multilevel = G(one_step(scene, s, 10, true, 0.0f));
+    const double chebyshev = G(one_step(scene, s, 10, false, 0.9f));
+    const double jacobi = G(one_step(scene, s, 10, false, 0.0f, ImplicitMethod::jacobi));
+    const double best = G(one_step(scene, s, 500, true, 0.9f));
+    std::printf("[ G - G(500 sweeps) after 10 sweeps ] plain %.3g J, multilevel %.3g J, chebyshev %.3g J, jacobi %.3g J\n",
+                plain - best, multilevel - best, chebyshev - best, jacobi - best);
+    EXPECT_LT(multilevel - best, 0.5 * (plain - best));
+    EXPECT_LT(chebyshev - best, plain - best);
+    EXPECT_GT(jacobi - best, plain - best);
+}
+
+// Steps far above the explicit bound, on the stiffest preset, from a crumpled start: finite, and the monitor's
+// figures healthy.
+TEST(Implicit, LargeStepsOnStiffFabricStayFinite) {
+    for (float dt : {1.0f / 30.0f, 0.1f}) {
+        SceneBuild scene = build_hang_scene(fabric_hang(40, "canvas"));
+        for (std::size_t i = 0; i < scene.initial.y.size(); ++i)
+            scene.initial.y[i] = 0.05f * std::sin(37.0f * scene.initial.x[i]) * std::cos(23.0f * scene.initial.z[i]);
+        SimulationParams p = implicit_params(dt, 8);
+        const double bound = stability_bound(scene.cloth, p).dt_max;
+        EXPECT_GT(dt, 100.0 * bound);
+        Simulation sim(std::move(scene.cloth), scene.initial, p);
+        ASSERT_NO_THROW(sim.step(40)) << dt;
+        const Health h = sim.health();
+        EXPECT_TRUE(h.finite);
+        EXPECT_LT(h.max_structural_strain, 0.5f) << dt;
+    }
+}
+
+TEST(Implicit, PinsHoldAndAGrabMovesItsParticle) {
+    SceneBuild scene = build_hang_scene(fabric_hang(24));
+    Simulation sim(scene.cloth, scene.initial, implicit_params(1.0f / 30.0f, 10));
+    const std::size_t pinned = 0, grabbed = 24 * 23 + 12; // a corner clip; the middle of the far edge
+    ASSERT_TRUE(sim.is_pinned(pinned));
+    const float px = sim.x()[pinned], py = sim.y()[pinned], pz = sim.z()[pinned];
+    sim.grab(grabbed, {0.0f, 0.3f, 0.2f});
+    sim.step(10);
+    EXPECT_EQ(sim.x()[pinned], px);
+    EXPECT_EQ(sim.y()[pinned], py);
+    EXPECT_EQ(sim.z()[pinned], pz);
+    EXPECT_FLOAT_EQ(sim.y()[grabbed], 0.3f);
+    // Its neighbours follow it up.
+    EXPECT_GT(sim.y()[grabbed - 24], 0.1f);
+    sim.release_grab();
+    sim.step(60);
+    EXPECT_LT(sim.y()[grabbed], 0.0f); // it falls again
+}
+
+TEST(Implicit, ValidatesItsParameters) {
+    SceneBuild scene = build_hang_scene(fabric_hang(8));
+    SimulationParams p = implicit_params(1.0f / 30.0f, 0);
+    EXPECT_THROW(Simulation(scene.cloth, scene.initial, p), InvalidInput);
+    p.implicit.iterations = 10;
+    p.implicit.chebyshev_rho = 1.0f;
+    EXPECT_THROW(Simulation(scene.cloth, scene.initial, p), InvalidInput);
+    p.implicit.chebyshev_rho = 0.5f;
+    p.integrator = Integrator::verlet;
+    EXPECT_THROW(Simulation(scene.cloth, scene.initial, p), InvalidInput);
+    p.integrator = Integrator::symplectic_euler;
+    p.dt = 0.2f;
+    EXPECT_THROW(Simulation(scene.cloth, scene.initial, p), InvalidInput);
+    p.dt = 0.1f;
+    EXPECT_NO_THROW(Simulation(scene.cloth, scene.initial, p));
+}
