@@ -33,12 +33,13 @@ Rates measure(const BuiltScene& scene, const Options& opt) {
     const std::size_t particles = scene.cloth.particle_count;
     // Implicit: from the hang after a few steps (moving), each timing a fresh copy's one step.
     Simulation base(scene.cloth, scene.initial,
-                    implicit_params(scene.params, opt.dt, k_lo, opt.rho, ImplicitMethod::gauss_seidel, 0.0f));
+                    implicit_params(scene.params, opt.dt, k_lo, opt.rho, ImplicitMethod::gauss_seidel, 0.0f,
+                                    opt.multilevel));
     base.step(3);
     const int repeats = particles > 200000 ? 2 : 4;
     for (std::uint32_t k : {k_lo, k_hi}) {
-        Simulation sim = base;
-        sim.set_params(implicit_params(base.params(), opt.dt, k, opt.rho, ImplicitMethod::gauss_seidel, 0.0f));
+        Simulation sim = restart(base, implicit_params(base.params(), opt.dt, k, opt.rho, ImplicitMethod::gauss_seidel,
+                                                       0.0f, opt.multilevel));
         sim.step(1); // warm
         const double t = best_of(repeats, [&] { sim.step(1); });
         (k == k_lo ? r.step_lo : r.step_hi) = t;
@@ -62,7 +63,8 @@ int cmd_throughput(const Options& opt) {
     if (opt.threads != 1) thread_counts.push_back(opt.threads);
     Table t;
     t.title = "Implicit iteration cost beside the explicit substep (hang, Gauss-Seidel VBD" +
-              std::string(opt.rho > 0.0f ? " + Chebyshev" : "") + ")";
+              std::string(opt.rho > 0.0f ? " + Chebyshev" : "") +
+              (opt.multilevel ? ", multilevel guess" : ", single level") + ")";
     t.columns = {"N", "particles", "threads", "implicit step, " + std::to_string(k_lo) + " it (ms)",
                  "implicit step, " + std::to_string(k_hi) + " it (ms)", "per iteration (ms)", "vertex-iterations/s",
                  "explicit substep (ms)", "particle-substeps/s", "substeps per iteration"};

@@ -21,7 +21,7 @@ BuiltScene hang_scene(std::uint32_t n) {
 }
 
 SimulationParams implicit_params(const SimulationParams& base, float dt, std::uint32_t iterations, float rho,
-                                 ImplicitMethod method, float strain_limit) {
+                                 ImplicitMethod method, float strain_limit, bool multilevel) {
     SimulationParams p = base;
     p.solver = Solver::implicit;
     p.integrator = Integrator::symplectic_euler;
@@ -31,7 +31,26 @@ SimulationParams implicit_params(const SimulationParams& base, float dt, std::ui
     p.implicit.chebyshev_rho = rho;
     p.implicit.method = method;
     p.strain_limit.ratio = strain_limit;
+    p.implicit.multilevel = multilevel;
     return p;
+}
+
+Simulation restart(const Simulation& sim, const SimulationParams& params) {
+    const std::size_t n = sim.cloth().particle_count;
+    InitialState st;
+    st.x.assign(sim.x().begin(), sim.x().end());
+    st.y.assign(sim.y().begin(), sim.y().end());
+    st.z.assign(sim.z().begin(), sim.z().end());
+    st.vx.resize(n);
+    st.vy.resize(n);
+    st.vz.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::array<float, 3> v = sim.velocity(i);
+        st.vx[i] = v[0];
+        st.vy[i] = v[1];
+        st.vz[i] = v[2];
+    }
+    return Simulation(sim.cloth(), st, params);
 }
 
 std::vector<double> positions(const Simulation& sim) {
@@ -280,10 +299,8 @@ Equilibrium reference_equilibrium(const Simulation& settled, const Options& opt,
     }
 #endif
     // A long implicit run: h = 0.1 s, many iterations, until a step moves no particle more than 1 um.
-    Simulation sim = settled;
-    SimulationParams p = implicit_params(settled.params(), 0.1f, opt.ref_iterations, opt.rho,
-                                         ImplicitMethod::gauss_seidel, 0.0f);
-    sim.set_params(p);
+    Simulation sim = restart(settled, implicit_params(settled.params(), 0.1f, opt.ref_iterations, opt.rho,
+                                                      ImplicitMethod::gauss_seidel, 0.0f, true));
     std::vector<double> x = positions(sim);
     double moved = 0.0;
     int steps = 0;

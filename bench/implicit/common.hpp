@@ -22,6 +22,7 @@ struct Options {
     std::uint32_t iterations = 30;         ///< --iterations per implicit step
     float rho = 0.9f;                      ///< --rho Chebyshev spectral radius estimate (0 = off)
     float strain_limit = 0.0f;             ///< --strain-limit ratio for the implicit run (0 = off)
+    bool multilevel = true;                ///< --single-level turns the implicit solver's multilevel guess off
     double duration = 2.0;                 ///< --duration s, the timed run
     double settle_time = 10.0;             ///< --settle-time s, the settled shape
     double explicit_budget = 60.0;         ///< --explicit-budget s of wall time an explicit run may take
@@ -40,9 +41,13 @@ struct Options {
 /// The built-in hang scene (scenes/hang.json: wool, 2 cm clips) at n x n particles; dt = the explicit default.
 BuiltScene hang_scene(std::uint32_t n);
 
+/// A new simulation of sim's cloth starting from its current positions and velocities, with params (Simulation is
+/// move-only; the implicit solver's memory of the previous step - its adaptive initial guess - starts afresh).
+Simulation restart(const Simulation& sim, const SimulationParams& params);
+
 /// Parameters of the implicit solver for a built scene.
 SimulationParams implicit_params(const SimulationParams& base, float dt, std::uint32_t iterations, float rho,
-                                 ImplicitMethod method, float strain_limit);
+                                 ImplicitMethod method, float strain_limit, bool multilevel = true);
 
 /// One implicit step's data from a simulation's current state (x^n, v^n, a = gravity), evaluated in double.
 struct StepProblem {
