@@ -143,7 +143,8 @@ int cmd_convergence(const Options& opt) {
         rep.tables.push_back(std::move(t));
     }
     rep.notes.push_back("CSV: " + csv_path + " (plot: bench/implicit/plot_convergence.py)");
-    rep.notes.push_back("Each point is a fresh copy of the same state stepped once with iterations = k (tolerance 0); "
+    rep.notes.push_back("Each point is a fresh simulation restarted from the same state (restart()) and stepped once with "
+                        "iterations = k (tolerance 0); "
                         "the wall time is that one step's (prediction, k sweeps, velocities). Errors below ~1e-7 are "
                         "at the float32 positions' rounding floor.");
     rep.print(opt.json, opt.json_out);
