@@ -72,8 +72,10 @@ int cmd_realtime(const Options& opt) {
     rep.command = "realtime";
     rep.threads = opt.threads;
     Table t;
-    t.title = "Real-time factor on the hang scene (wool, 2 cm clips): " + std::to_string(opt.duration) +
-              " s timed; settled shape at " + std::to_string(opt.settle_time) + " s";
+    char title[200];
+    std::snprintf(title, sizeof title, "Real-time factor on the hang scene (wool, 2 cm clips): %g s timed; settled shape at %g s",
+                  opt.duration, opt.settle_time);
+    t.title = title;
     t.columns = {"N",          "particles",      "solver",       "dt (s)",      "iterations", "strain limit",
                  "timed (s)",  "wall (s)",       "real-time x",  "max strain at t_end", "finite",
                  "last rel. residual", "settled at (s)", "distance to reference (mm)", "quality"};

@@ -31,7 +31,9 @@ struct Options {
     std::uint32_t newton_max_n = 64;       ///< --newton-max-n: the static Eigen reference up to this N, a long run above
     std::uint32_t newton_step_max_n = 100; ///< --newton-step-max-n: convergence's G* by Newton up to this N
     int newton_iterations = 100;           ///< --newton-iterations: at most this many Newton iterations per reference
-    std::uint32_t ref_iterations = 200;    ///< --ref-iterations of the long implicit reference run
+    std::uint32_t ref_iterations = 100;    ///< --ref-iterations of the long implicit reference run
+    int ref_steps = 60;                    ///< --ref-steps: at most this many 0.1 s steps of it
+    double ref_drag = 5.0;                 ///< --ref-drag: its air drag, 1/s (the equilibrium does not depend on it)
     std::uint32_t kmax = 300;              ///< --kmax (convergence) most iterations plotted
     std::string json_out;                  ///< --json-out FILE: the JSON object also written there
     std::string csv;                       ///< --csv (convergence) file

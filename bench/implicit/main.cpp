@@ -16,7 +16,8 @@
 // iteration at N = 100 and the static problem 100s of iterations); --newton-step-max-n N convergence's G* by Newton
 // up to N (default 100);
 // --newton-iterations K at most K Newton iterations per reference equilibrium (default 100);
-// --ref-iterations K of the long-run reference (default 200, up to 20 steps of 0.1 s); --kmax K (convergence, default 300); --csv FILE or
+// --ref-iterations K of the long-run reference (default 100), --ref-steps S its most steps of 0.1 s (default
+// 60), --ref-drag D its air drag (default 5/s: the swing dies out; the equilibrium does not depend on drag); --kmax K (convergence, default 300); --csv FILE or
 // --out DIR (convergence's CSV; default ./convergence.csv); --json-out FILE also writes the JSON object there.
 #include <cstdio>
 #include <cstdlib>
@@ -52,7 +53,7 @@ int main(int argc, char** argv) {
     if (argc < 2 || std::strcmp(argv[1], "--help") == 0) {
         std::fprintf(stderr, "usage: drape_implicit realtime|convergence|throughput [--n N,..] [--threads T] [--json] "
                              "[--dt S] [--iterations K] [--rho R] [--strain-limit R] [--single-level] [--duration S] [--settle-time S] "
-                             "[--explicit-budget S] [--explicit-settle-budget S] [--explicit-short S] [--newton-max-n N] [--newton-step-max-n N] [--newton-iterations K] [--ref-iterations K] "
+                             "[--explicit-budget S] [--explicit-settle-budget S] [--explicit-short S] [--newton-max-n N] [--newton-step-max-n N] [--newton-iterations K] [--ref-iterations K] [--ref-steps S] [--ref-drag D] "
                              "[--kmax K] [--csv FILE | --out DIR] [--json-out FILE]\n");
         return 2;
     }
@@ -93,6 +94,8 @@ int main(int argc, char** argv) {
             opt.newton_step_max_n = static_cast<std::uint32_t>(number("--newton-step-max-n", value(), 0, 4096));
         else if (s == "--newton-iterations")
             opt.newton_iterations = static_cast<int>(number("--newton-iterations", value(), 1, 100000));
+        else if (s == "--ref-steps") opt.ref_steps = static_cast<int>(number("--ref-steps", value(), 1, 10000));
+        else if (s == "--ref-drag") opt.ref_drag = number("--ref-drag", value(), 0, 100);
         else if (s == "--ref-iterations")
             opt.ref_iterations = static_cast<std::uint32_t>(number("--ref-iterations", value(), 1, 1000));
         else if (s == "--kmax") opt.kmax = static_cast<std::uint32_t>(number("--kmax", value(), 1, 1000));
