@@ -713,13 +713,14 @@ TEST(ViewSessionImplicit, BudgetIterationsRule) {
     EXPECT_EQ(budget_iterations(14.0, 16.0, 20, 20, 40), 20u);
     // Room: raised by at most a quarter (at least one), never above the cap.
     EXPECT_EQ(budget_iterations(1.0, 16.0, 20, 20, 40), 25u);
-    EXPECT_EQ(budget_iterations(1.0, 16.0, 4, 4, 40), 5u);
+    EXPECT_EQ(budget_iterations(1.0, 16.0, view_min_iterations, view_min_iterations, 40),
+              view_min_iterations + std::max(1u, view_min_iterations / 4));
     EXPECT_EQ(budget_iterations(1.0, 16.0, 39, 39, 40), 40u);
     EXPECT_EQ(budget_iterations(1.0, 16.0, 40, 40, 40), 40u);
     // A cap below the floor is the floor.
     EXPECT_EQ(budget_iterations(1000.0, 16.0, 2, 2, 2), 2u);
     // Steps stopped early by a tolerance: the cost is that of the iterations that ran.
-    EXPECT_EQ(budget_iterations(32.0, 16.0, 40, 10, 40), view_min_iterations + 1);
+    EXPECT_EQ(budget_iterations(32.0, 16.0, 40, 30, 40), 15u);
 }
 
 TEST(ViewSessionImplicit, IterationBudgetFollowsTheFrameTime) {
