@@ -195,7 +195,7 @@ void Simulation::set_material(SpringKind kind, SpringMaterial material) {
         throw;
     }
     if (implicit_) {
-        vbd::refresh_materials(implicit_->fine.graph(), cloth_);
+        implicit_->fine.refresh_materials(cloth_);
         // Coarse levels keep the fabric's own constants (a user's spring material applies to the cloth itself).
     }
     monitor_.init(cloth_, params_);

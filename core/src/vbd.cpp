@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "for_each_index.hpp"
+#include "vbd_batch.hpp"
 
 namespace drape::vbd {
 
@@ -145,8 +146,87 @@ namespace {
 constexpr std::size_t vbd_chunk = 256; ///< vertices per parallel chunk of a colour (fixed: determinism)
 }
 
+Solver::Solver() = default;
+Solver::~Solver() = default;
+Solver::Solver(Solver&&) noexcept = default;
+Solver& Solver::operator=(Solver&&) noexcept = default;
+
+void Solver::refresh_materials(const Cloth& cloth) {
+    vbd::refresh_materials(graph_, cloth);
+    VbdSlices& sl = *slices_;
+    for (std::size_t e = 0; e < sl.spring_edge.size(); ++e) {
+        if (sl.spring_edge[e] == UINT32_MAX) continue;
+        const Edge& edge = cloth.edges[sl.spring_edge[e]];
+        const SpringMaterial& m = cloth.material[static_cast<std::size_t>(edge.kind)];
+        sl.spring_k[e] = m.stiffness * edge.scale;
+        sl.spring_kd[e] = m.damping * edge.scale;
+    }
+}
+
 void Solver::cook(const Cloth& cloth) {
     graph_ = vbd::cook(cloth);
+    static_assert(vbd_chunk % simd::width == 0, "a chunk is whole slices");
+    constexpr std::size_t W = simd::width;
+    const VbdGraph& g = graph_;
+    slices_ = std::make_unique<VbdSlices>();
+    VbdSlices& sl = *slices_;
+    // Slices of W vertices of each colour, in the colour's order; springs and bending rows slot-major.
+    std::vector<std::uint32_t> vertex, spring_neighbour, spring_edge, bend_neighbour;
+    std::vector<float> spring_k, spring_kd, spring_rest, bend_q;
+    for (std::size_t c = 0; c < g.colour_count(); ++c) {
+        sl.colour_slices.push_back(static_cast<std::uint32_t>(sl.lanes.size()));
+        for (std::uint32_t first = g.colour_offsets[c]; first < g.colour_offsets[c + 1]; first += W) {
+            const std::uint32_t lanes = std::min<std::uint32_t>(W, g.colour_offsets[c + 1] - first);
+            sl.lanes.push_back(lanes);
+            std::uint32_t springs = 0, bends = 0;
+            for (std::uint32_t k = 0; k < W; ++k) {
+                const std::uint32_t v = g.colour_vertex[first + (k < lanes ? k : 0)];
+                vertex.push_back(v);
+                springs = std::max(springs, g.spring_offsets[v + 1] - g.spring_offsets[v]);
+                if (!g.bend_offsets.empty()) bends = std::max(bends, g.bend_offsets[v + 1] - g.bend_offsets[v]);
+            }
+            sl.spring_begin.push_back(static_cast<std::uint32_t>(spring_neighbour.size()));
+            sl.spring_slots.push_back(springs);
+            for (std::uint32_t s = 0; s < springs; ++s)
+                for (std::uint32_t k = 0; k < W; ++k) {
+                    const std::uint32_t v = vertex[vertex.size() - W + k];
+                    const std::uint32_t e = g.spring_offsets[v] + s;
+                    const bool real = k < lanes && e < g.spring_offsets[v + 1];
+                    spring_neighbour.push_back(real ? g.spring_neighbour[e] : v);
+                    spring_edge.push_back(real ? g.spring_edge[e] : UINT32_MAX);
+                    spring_k.push_back(real ? g.spring_k[e] : 0.0f);
+                    spring_kd.push_back(real ? g.spring_kd[e] : 0.0f);
+                    spring_rest.push_back(real ? g.spring_rest[e] : 0.0f);
+                }
+            sl.bend_begin.push_back(static_cast<std::uint32_t>(bend_neighbour.size()));
+            sl.bend_slots.push_back(bends);
+            for (std::uint32_t s = 0; s < bends; ++s)
+                for (std::uint32_t k = 0; k < W; ++k) {
+                    const std::uint32_t v = vertex[vertex.size() - W + k];
+                    const std::uint32_t e = g.bend_offsets[v] + s;
+                    const bool real = k < lanes && e < g.bend_offsets[v + 1];
+                    bend_neighbour.push_back(real ? g.bend_neighbour[e] : v);
+                    bend_q.push_back(real ? g.bend_q[e] : 0.0f);
+                }
+        }
+    }
+    sl.colour_slices.push_back(static_cast<std::uint32_t>(sl.lanes.size()));
+    auto fill_u = [](AlignedArray<std::uint32_t>& out, const std::vector<std::uint32_t>& in) {
+        out.reset(in.size());
+        std::copy(in.begin(), in.end(), out.data());
+    };
+    auto fill_f = [](AlignedArray<float>& out, const std::vector<float>& in) {
+        out.reset(in.size());
+        std::copy(in.begin(), in.end(), out.data());
+    };
+    fill_u(sl.vertex, vertex);
+    fill_u(sl.spring_neighbour, spring_neighbour);
+    fill_u(sl.spring_edge, spring_edge);
+    fill_f(sl.spring_k, spring_k);
+    fill_f(sl.spring_kd, spring_kd);
+    fill_f(sl.spring_rest, spring_rest);
+    fill_u(sl.bend_neighbour, bend_neighbour);
+    fill_f(sl.bend_q, bend_q);
     const std::size_t n = cloth.particle_count;
     for (std::vector<float>* a : {&pred_x_, &pred_y_, &pred_z_, &cheb1_x_, &cheb1_y_, &cheb1_z_, &cheb2_x_, &cheb2_y_,
                                   &cheb2_z_, &jac_x_, &jac_y_, &jac_z_, &contact_nx_, &contact_ny_, &contact_nz_, &contact_mu_})
@@ -223,6 +303,28 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
                     double r = 0.0;
                     const std::uint32_t lo = first + static_cast<std::uint32_t>(ch * vbd_chunk);
                     const std::uint32_t hi = std::min<std::uint32_t>(last, lo + static_cast<std::uint32_t>(vbd_chunk));
+                    if (simd_) { // the chunk's slices: W vertices at once, then each live movable lane in order
+                        constexpr std::size_t W = simd::width;
+                        const VbdSlices& sl = *slices_;
+                        const std::size_t s0 = sl.colour_slices[c] + ch * (vbd_chunk / W);
+                        const std::size_t s1 = s0 + (hi - lo + W - 1) / W;
+                        alignas(64) float ox[W], oy[W], oz[W], g2[W];
+                        for (std::size_t slice = s0; slice < s1; ++slice) {
+                            solve_batch(args, sl, slice, ox, oy, oz, g2);
+                            for (std::uint32_t lane = 0; lane < sl.lanes[slice]; ++lane) {
+                                const std::uint32_t i = sl.vertex[slice * W + lane];
+                                if (inv_mass[i] == 0.0f) continue;
+                                r += g2[lane];
+                                float out[3] = {ox[lane], oy[lane], oz[lane]};
+                                if (contact) keep_out(i, out);
+                                x[i] = out[0];
+                                y[i] = out[1];
+                                z[i] = out[2];
+                            }
+                        }
+                        chunk_residual_[base + ch] = r;
+                        return;
+                    }
                     for (std::uint32_t k = lo; k < hi; ++k) {
                         const std::uint32_t i = graph_.colour_vertex[k];
                         if (inv_mass[i] == 0.0f) continue;

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include <memory>
 #include <span>
 
 #include "drape/cloth.hpp"
@@ -40,10 +41,21 @@ struct LevelState {
 /// touches no collider.
 float contact_project(std::span<const Collider> colliders, const float p0[3], float p[3], float normal[3]) noexcept;
 
+struct VbdSlices;
+
 /// The sweeps of one cloth (one level of the multilevel solve, or the only one): its cooked graph and scratch.
 class Solver {
   public:
+    Solver();
+    ~Solver();
+    Solver(Solver&&) noexcept;
+    Solver& operator=(Solver&&) noexcept;
     void cook(const Cloth& cloth);
+    /// Refreshes the springs' k and kd from the cloth's materials (after Simulation::set_material).
+    void refresh_materials(const Cloth& cloth);
+    /// Gauss-Seidel sweeps run simd::width vertices of a colour at once (vbd_batch.hpp; default) or one by one with
+    /// solve_vertex (the scalar reference; the same bits).
+    void set_simd(bool on) noexcept { simd_ = on; }
     bool cooked() const noexcept { return !graph_.colour_offsets.empty(); }
     VbdGraph& graph() noexcept { return graph_; }
     const VbdGraph& graph() const noexcept { return graph_; }
@@ -68,6 +80,8 @@ class Solver {
     std::vector<float> contact_nx_, contact_ny_, contact_nz_, contact_mu_;
     std::vector<double> chunk_residual_;          ///< per fixed chunk of a sweep: sum of |g_i|^2
     std::vector<std::uint32_t> colour_chunk_base_; ///< per colour: its first chunk in chunk_residual_
+    std::unique_ptr<VbdSlices> slices_;
+    bool simd_ = true;
 };
 
 /// Everything one sweep reads: the state at the start of the step, the inertial prediction, the iterate.
