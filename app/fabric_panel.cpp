@@ -17,12 +17,14 @@ namespace {
 /// A number field that shows `current` and, once an edit is committed (Enter, Tab or a click elsewhere), returns
 /// true with the typed value in `out` (a rebuild per keystroke would be wasted work).
 bool commit_float(const char* label, float current, const char* format, float& out) {
-    const ImGuiID id = ImGui::GetID(label);
-    float* buffer = ImGui::GetStateStorage()->GetFloatRef(id ^ 0x2545f491u, current);
-    if (ImGui::GetActiveID() != id) *buffer = current; // between edits: the session's value
-    ImGui::InputFloat(label, buffer, 0.0f, 0.0f, format);
-    out = *buffer;
-    return ImGui::IsItemDeactivatedAfterEdit() && *buffer != current;
+    // By value: a pointer into ImGui's state storage dangles once another key is inserted (view_ui.cpp edit_float).
+    ImGuiStorage* storage = ImGui::GetStateStorage();
+    const ImGuiID id = ImGui::GetID(label), key = id ^ 0x2545f491u;
+    float buffer = ImGui::GetActiveID() == id ? storage->GetFloat(key, current) : current; // between edits: the session's
+    ImGui::InputFloat(label, &buffer, 0.0f, 0.0f, format);
+    storage->SetFloat(key, buffer);
+    out = buffer;
+    return ImGui::IsItemDeactivatedAfterEdit() && buffer != current;
 }
 
 } // namespace

@@ -51,33 +51,32 @@ bool colour_edit(const char* label, Eigen::Vector3f& c) {
 /// `current` (the session's value), so a refused value reverts. Returns true with `out` when a value is to apply.
 bool edit_float(const char* label, float current, float lo, float hi, const char* format, ImGuiSliderFlags flags,
                 float& out) {
-    const ImGuiID id = ImGui::GetID(label);
-    float* buffer = ImGui::GetStateStorage()->GetFloatRef(id ^ 0x5bd1e995u, current);
-    if (ImGui::GetActiveID() != id) *buffer = current;
-    const bool changed = ImGui::SliderFloat(label, buffer, lo, hi, format, flags);
+    // The edit buffer lives in ImGui's state storage, read and written by value: a pointer into the storage
+    // dangles as soon as another key is inserted (ASan: heap-use-after-free with the Physics panel open).
+    ImGuiStorage* storage = ImGui::GetStateStorage();
+    const ImGuiID id = ImGui::GetID(label), key = id ^ 0x5bd1e995u;
+    float buffer = ImGui::GetActiveID() == id ? storage->GetFloat(key, current) : current;
+    const bool changed = ImGui::SliderFloat(label, &buffer, lo, hi, format, flags);
     const bool typing = ImGui::TempInputIsActive(id);
-    out = *buffer;
-    if (changed && !typing) return true;                           // dragged: live
-    return ImGui::IsItemDeactivatedAfterEdit() && *buffer != current; // typed: on commit
+    storage->SetFloat(key, buffer);
+    out = buffer;
+    if (changed && !typing) return true;                          // dragged: live
+    return ImGui::IsItemDeactivatedAfterEdit() && buffer != current; // typed: on commit
 }
 
 /// The same for three-component sliders (gravity, wind velocity).
 bool edit_float3(const char* label, const std::array<float, 3>& current, float lo, float hi, const char* format,
                  ImGuiSliderFlags flags, std::array<float, 3>& out) {
-    ImGuiStorage* storage = ImGui::GetStateStorage();
-    const ImGuiID id = ImGui::GetID(label);
-    bool* was_active = storage->GetBoolRef(id ^ 0x27d4eb2du, false);
-    float* buffer[3];
-    for (unsigned i = 0; i < 3; ++i) {
-        buffer[i] = storage->GetFloatRef(id ^ (0x5bd1e995u + i), current[i]);
-        if (!*was_active) *buffer[i] = current[i];
-    }
-    float v[3] = {*buffer[0], *buffer[1], *buffer[2]};
+    ImGuiStorage* storage = ImGui::GetStateStorage(); // by value, as in edit_float
+    const ImGuiID id = ImGui::GetID(label), active_key = id ^ 0x27d4eb2du;
+    const bool was_active = storage->GetBool(active_key, false);
+    float v[3];
+    for (unsigned i = 0; i < 3; ++i) v[i] = was_active ? storage->GetFloat(id ^ (0x5bd1e995u + i), current[i]) : current[i];
     const bool changed = ImGui::SliderFloat3(label, v, lo, hi, format, flags);
-    *was_active = ImGui::IsItemActive();
+    storage->SetBool(active_key, ImGui::IsItemActive());
     const bool typing = ImGui::TempInputIsActive(ImGui::GetActiveID());
     for (unsigned i = 0; i < 3; ++i) {
-        *buffer[i] = v[i];
+        storage->SetFloat(id ^ (0x5bd1e995u + i), v[i]);
         out[i] = v[i];
     }
     if (changed && !typing) return true;
@@ -86,14 +85,15 @@ bool edit_float3(const char* label, const std::array<float, 3>& current, float l
 
 /// The same for integer sliders.
 bool edit_int(const char* label, int current, int lo, int hi, const char* format, ImGuiSliderFlags flags, int& out) {
-    const ImGuiID id = ImGui::GetID(label);
-    int* buffer = ImGui::GetStateStorage()->GetIntRef(id ^ 0x5bd1e995u, current);
-    if (ImGui::GetActiveID() != id) *buffer = current;
-    const bool changed = ImGui::SliderInt(label, buffer, lo, hi, format, flags);
+    ImGuiStorage* storage = ImGui::GetStateStorage(); // by value, as in edit_float
+    const ImGuiID id = ImGui::GetID(label), key = id ^ 0x5bd1e995u;
+    int buffer = ImGui::GetActiveID() == id ? storage->GetInt(key, current) : current;
+    const bool changed = ImGui::SliderInt(label, &buffer, lo, hi, format, flags);
     const bool typing = ImGui::TempInputIsActive(id);
-    out = *buffer;
+    storage->SetInt(key, buffer);
+    out = buffer;
     if (changed && !typing) return true;
-    return ImGui::IsItemDeactivatedAfterEdit() && *buffer != current;
+    return ImGui::IsItemDeactivatedAfterEdit() && buffer != current;
 }
 
 
