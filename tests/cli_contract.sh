@@ -6,7 +6,10 @@ DRAPE=${DRAPE:?set DRAPE to the drape executable}
 fail=0
 err=$(mktemp)
 out=$(mktemp)
-trap 'rm -f "$err" "$out"' EXIT
+log=$(mktemp)
+trap 'rm -f "$err" "$out" "$log"' EXIT
+# Everything printed is also kept, so the failures can be repeated together at the end (CI shows a log's tail).
+exec > >(tee "$log") 2>&1
 
 expect_exit() { # expect_exit CODE "what must appear in the message" args...: one line on stderr, never a hang
     local want_code=$1 want=$2
@@ -292,8 +295,8 @@ print("ok: --json ->", {k: j[k] for k in ("particles", "springs", "substeps", "c
 PY
 
 # --threads runs that many workers (also above the core count) and the JSON reports them; same checksum as 1.
-"$DRAPE" run --size 40 --steps 50 --threads 8 --json >"$out" 2>"$err" || { echo "FAIL: --threads 8"; fail=1; }
-"$DRAPE" run --size 40 --steps 50 --threads 1 --json >"$out.1" 2>"$err" || { echo "FAIL: --threads 1"; fail=1; }
+"$DRAPE" run --size 40 --steps 50 --threads 8 --json >"$out" 2>"$err" || { echo "FAIL: --threads 8"; cat "$err"; fail=1; }
+"$DRAPE" run --size 40 --steps 50 --threads 1 --json >"$out.1" 2>"$err" || { echo "FAIL: --threads 1"; cat "$err"; fail=1; }
 python3 - "$out" "$out.1" <<'PY' || fail=1
 import json, sys
 j, one = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
@@ -328,7 +331,7 @@ check_health "j['healthy'] and j['finite'] and j['kinetic_energy'] < 0.49 and 'h
     --scene "$tmpdir/overlap.json" --sim-seconds 2
 
 # --sim-seconds converts to substeps of the default dt.
-"$DRAPE" run --size 20 --sim-seconds 0.05 --json >"$out" 2>"$err" || { echo "FAIL: --sim-seconds"; fail=1; }
+"$DRAPE" run --size 20 --sim-seconds 0.05 --json >"$out" 2>"$err" || { echo "FAIL: --sim-seconds"; cat "$err"; fail=1; }
 python3 -c "import json,sys; j=json.load(open('$out')); assert abs(j['sim_seconds']-0.05) < j['dt']+1e-9, j; print('ok: --sim-seconds ->', j['substeps'], 'substeps')" || fail=1
 
 # Materials: --material takes a fabric preset or springs; the spring flags are refused for a fabric; the run's JSON
@@ -351,7 +354,7 @@ d = m["derived"]
 assert d["node_mass_g"] > 0 and all(k in d["spring_k"] for k in ("structural", "shear", "bend", "seam")), d
 print("ok: run --material denim ->", m["model"], m["fabric"]["name"], "node mass", d["node_mass_g"], "g, k", d["spring_k"])
 PY
-"$DRAPE" run --size 12 --material springs --steps 5 --json >"$out" 2>"$err" || { echo "FAIL: run --material springs"; fail=1; }
+"$DRAPE" run --size 12 --material springs --steps 5 --json >"$out" 2>"$err" || { echo "FAIL: run --material springs"; cat "$err"; fail=1; }
 python3 -c "import json,sys; j=json.load(open('$out')); m=j['material']; assert m['model']=='springs' and j['stiffness']==m['stiffness'] and m['derived']['spring_k']['structural']==m['stiffness'], m; print('ok: run --material springs ->', m['derived'])" || fail=1
 "$DRAPE" materials >"$out" 2>"$err" && grep -q "^denim" "$out" && grep -q "^silk" "$out" || { echo "FAIL: drape materials"; cat "$out" "$err"; fail=1; }
 "$DRAPE" materials --json >"$out" 2>"$err" || fail=1
@@ -363,5 +366,11 @@ for h in "--help" "run --help"; do
 done
 grep -q -- "--integrator" <("$DRAPE" run --help) || { echo "FAIL: run --help lacks --integrator"; fail=1; }
 
-if [ $fail = 0 ]; then echo "cli contract: all checks passed"; fi
+if [ $fail = 0 ]; then
+    echo "cli contract: all checks passed"
+else
+    sleep 0.2 # let tee catch up
+    echo "== cli contract: the failed checks again (with what they printed) =="
+    grep -A8 -E "^FAIL|Traceback|Error" "$log" | grep -v "^ok: "
+fi
 exit $fail
