@@ -17,7 +17,7 @@ namespace {
 constexpr std::size_t aero_chunk = 4096; ///< triangles per parallel chunk
 }
 
-void Simulation::cook_aero() {
+void Simulation::cook_vertex_triangles() {
     if (!vertex_tri_offsets_.empty()) return;
     const std::size_t n = cloth_.particle_count, tris = cloth_.triangles.size() / 3;
     vertex_tri_offsets_.assign(n + 1, 0);
@@ -27,6 +27,12 @@ void Simulation::cook_aero() {
     std::vector<std::uint32_t> fill(vertex_tri_offsets_.begin(), vertex_tri_offsets_.end() - 1);
     for (std::uint32_t t = 0; t < tris; ++t)
         for (int k = 0; k < 3; ++k) vertex_tris_[fill[cloth_.triangles[3 * t + k]]++] = t;
+}
+
+void Simulation::cook_aero() {
+    if (!tri_fx_.empty()) return;
+    cook_vertex_triangles();
+    const std::size_t tris = cloth_.triangles.size() / 3;
     tri_fx_.assign(tris, 0.0f);
     tri_fy_.assign(tris, 0.0f);
     tri_fz_.assign(tris, 0.0f);

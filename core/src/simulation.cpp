@@ -117,6 +117,7 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
     inv_mass_free_ = cloth_.free_inv_mass.size() == n ? cloth_.free_inv_mass : inv_mass_authored_;
     if (params_.strain_limit.ratio > 0.0f) cook_strain_limit();
     if (params_.aero.enabled) cook_aero();
+    if (!params_.colliders.empty()) cook_triangle_contact();
     if (params_.solver == Solver::implicit) cook_implicit();
 
     StateBuffer& s = buffers_[0];
@@ -178,6 +179,7 @@ void Simulation::set_params(const SimulationParams& params) {
     kernel_ = kernel;
     if (params_.strain_limit.ratio > 0.0f) cook_strain_limit();
     if (params_.aero.enabled) cook_aero();
+    if (!params_.colliders.empty()) cook_triangle_contact();
     if (params_.solver == Solver::implicit) cook_implicit();
     monitor_.init(cloth_, params_);
     rebaseline_ = true;

@@ -242,13 +242,32 @@ class Simulation {
     /// Runs strain limiting on `out` when it is due this substep (returns false when not); with `with_collide`, the
     /// collide stage runs after every sweep (limit and collide interleaved, collide last).
     template <bool Parallel> bool strain_limit_stage(StateBuffer& out, bool with_collide);
-    template <bool Parallel> void collide_stage(StateBuffer& out);
+    /// The collide stage on `out`: its particle pass (unless `particles` is false), then `triangle_rounds` rounds of
+    /// its triangle pass (strain limiting interleaves the stage with its sweeps, with one round each).
+    template <bool Parallel> void collide_stage(StateBuffer& out, bool particles = true, int triangle_rounds = 2);
+    /// The triangle pass of the collide stage (collide.cpp, triangle_contact.hpp): triangles whose inside reaches
+    /// into a collider are pushed out at their deepest point, in up to `rounds` rounds (stopping at a round with no
+    /// contact); returns the number of contacts it applied (over the rounds).
+    template <bool Parallel>
+    std::size_t collide_triangles(float* x, float* y, float* z, float* vx, float* vy, float* vz, int rounds);
+    /// Per triangle, what its contact asks of its vertices: vertex i of the triangle moves by k b_i w_i dq and its
+    /// velocity changes by k b_i w_i dv (w = inverse mass, k = 1 / sum b_j^2 w_j), so the contact point moves by dq.
+    struct TriangleResponse {
+        float b[3], k, dq[3], dv[3];
+    };
+    std::vector<TriangleResponse> tri_response_;
+    std::vector<std::uint8_t> tri_in_contact_;
+    std::vector<float> clearance_; ///< per particle: a lower bound of its distance to the nearest non-plane collider
+    std::vector<float> core_measure_; ///< per collider, per particle: core_measure (triangle_contact.hpp)
+    void cook_triangle_contact();
+    void cook_vertex_triangles();
     template <bool Parallel> void seam_forces_stage();
     template <bool Parallel> void aero_forces_stage();
     void cook_aero();
     /// Force per particle from aero_forces and seam_forces, N (allocated when either runs).
     AlignedArray<float> extra_fx_, extra_fy_, extra_fz_;
-    // Aerodynamic wind (cooked when first enabled): per-triangle forces and, per particle, its triangles (CSR).
+    // Aerodynamic wind (cooked when first enabled): per-triangle forces and, per particle, its triangles (CSR, cooked
+    // for the wind or for triangle contact: cook_vertex_triangles).
     std::vector<float> tri_fx_, tri_fy_, tri_fz_;
     std::vector<std::uint32_t> vertex_tri_offsets_, vertex_tris_;
     bool extra_forces() const noexcept { return !cloth_.seams.empty() || params_.aero.enabled; }

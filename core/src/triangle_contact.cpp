@@ -1,0 +1,387 @@
+// The deepest point of a cloth triangle inside an analytic collider (triangle_contact.hpp has the method).
+#include "drape/triangle_contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace drape {
+namespace {
+
+struct V3 {
+    double x, y, z;
+};
+inline V3 operator-(V3 a, V3 b) noexcept { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline V3 operator+(V3 a, V3 b) noexcept { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline V3 operator*(double s, V3 a) noexcept { return {s * a.x, s * a.y, s * a.z}; }
+inline double dot(V3 a, V3 b) noexcept { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline double norm(V3 a) noexcept { return std::sqrt(dot(a, a)); }
+inline V3 v3(const Vec3f& p) noexcept { return {p[0], p[1], p[2]}; }
+
+/// Barycentric coordinates of the point of triangle (a, b, c) closest to p (Ericson, "Real-Time Collision
+/// Detection", 2005, section 5.1.5: the Voronoi regions of the vertices, then the edges, then the face).
+std::array<double, 3> closest_on_triangle(V3 p, V3 a, V3 b, V3 c) noexcept {
+    const V3 ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+    if (d1 <= 0.0 && d2 <= 0.0) return {1.0, 0.0, 0.0};
+    const V3 bp = p - b;
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0.0 && d4 <= d3) return {0.0, 1.0, 0.0};
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+        const double v = d1 / (d1 - d3);
+        return {1.0 - v, v, 0.0};
+    }
+    const V3 cp = p - c;
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0.0 && d5 <= d6) return {0.0, 0.0, 1.0};
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+        const double w = d2 / (d2 - d6);
+        return {1.0 - w, 0.0, w};
+    }
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
+        const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return {0.0, 1.0 - w, w};
+    }
+    const double denom = va + vb + vc;
+    if (!(denom > 0.0)) return {1.0, 0.0, 0.0}; // a degenerate triangle: its first vertex
+    const double v = vb / denom, w = vc / denom;
+    return {1.0 - v - w, v, w};
+}
+
+/// Signed distance of p to the solid of a sphere, capsule or disc (negative inside), m.
+double solid_distance(const Collider& col, V3 p) noexcept {
+    const V3 c = v3(col.centre);
+    switch (col.kind) {
+    case ColliderKind::sphere:
+        return norm(p - c) - col.size[0];
+    case ColliderKind::capsule: {
+        const V3 ab = v3(col.axis) - c;
+        const double len2 = dot(ab, ab);
+        const double s = len2 > 0.0 ? std::clamp(dot(p - c, ab) / len2, 0.0, 1.0) : 0.0;
+        return norm(p - (c + s * ab)) - col.size[0];
+    }
+    case ColliderKind::disc: {
+        const double R = col.size[0], top = col.centre[1], bottom = double(col.centre[1]) - col.size[1];
+        const double r = std::sqrt((p.x - c.x) * (p.x - c.x) + (p.z - c.z) * (p.z - c.z)); // not hypot: slow
+        const double er = std::max(r - R, 0.0), ey = p.y > top ? p.y - top : (p.y < bottom ? bottom - p.y : 0.0);
+        if (er == 0.0 && ey == 0.0) return -std::min({top - p.y, R - r, p.y - bottom});
+        return std::sqrt(er * er + ey * ey);
+    }
+    case ColliderKind::plane:
+        return dot(p - c, v3(col.axis));
+    case ColliderKind::ellipsoid:
+        break; // not a distance: see deepest()
+    }
+    return 0.0;
+}
+
+/// Closest points of segments p1-q1 and p2-q2 (Ericson 2005, 5.1.9): parameters s on the first, t on the second.
+void closest_segments(V3 p1, V3 q1, V3 p2, V3 q2, double& s, double& t) noexcept {
+    const V3 d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
+    const double a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r);
+    constexpr double eps = 1e-30;
+    if (a <= eps && e <= eps) {
+        s = t = 0.0;
+        return;
+    }
+    if (a <= eps) {
+        s = 0.0;
+        t = std::clamp(f / e, 0.0, 1.0);
+        return;
+    }
+    const double c = dot(d1, r);
+    if (e <= eps) {
+        t = 0.0;
+        s = std::clamp(-c / a, 0.0, 1.0);
+        return;
+    }
+    const double b = dot(d1, d2), denom = a * e - b * b;
+    s = denom > 0.0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+    t = (b * s + f) / e;
+    if (t < 0.0) {
+        t = 0.0;
+        s = std::clamp(-c / a, 0.0, 1.0);
+    } else if (t > 1.0) {
+        t = 1.0;
+        s = std::clamp((b - c) / a, 0.0, 1.0);
+    }
+}
+
+/// Barycentric coordinates of the point of triangle (a, b, c) closest to segment e0-e1 (exact): the segment's ends
+/// against the triangle, the triangle's edges against the segment, and the segment crossing the triangle.
+std::array<double, 3> closest_to_segment(V3 e0, V3 e1, V3 a, V3 b, V3 c) noexcept {
+    std::array<double, 3> best{1.0, 0.0, 0.0};
+    double best_d = std::numeric_limits<double>::max();
+    auto point = [&](const std::array<double, 3>& k) { return k[0] * a + k[1] * b + k[2] * c; };
+    auto offer = [&](const std::array<double, 3>& k, V3 other) {
+        const double d = norm(point(k) - other);
+        if (d < best_d) best_d = d, best = k;
+    };
+    offer(closest_on_triangle(e0, a, b, c), e0);
+    offer(closest_on_triangle(e1, a, b, c), e1);
+    const V3 corner[3] = {a, b, c};
+    for (int k = 0; k < 3; ++k) {
+        double s = 0.0, t = 0.0;
+        closest_segments(corner[k], corner[(k + 1) % 3], e0, e1, s, t);
+        std::array<double, 3> bary{0.0, 0.0, 0.0};
+        bary[k] = 1.0 - s;
+        bary[(k + 1) % 3] = s;
+        offer(bary, e0 + t * (e1 - e0));
+    }
+    // The segment through the triangle's plane inside the triangle: distance 0 there.
+    const V3 n = {(b - a).y * (c - a).z - (b - a).z * (c - a).y, (b - a).z * (c - a).x - (b - a).x * (c - a).z,
+                  (b - a).x * (c - a).y - (b - a).y * (c - a).x};
+    const double h0 = dot(e0 - a, n), h1 = dot(e1 - a, n);
+    if ((h0 < 0.0) != (h1 < 0.0) && h0 != h1) {
+        const V3 x = e0 + (h0 / (h0 - h1)) * (e1 - e0);
+        const std::array<double, 3> k = closest_on_triangle(x, a, b, c);
+        offer(k, x);
+    }
+    return best;
+}
+
+/// Minimum of f(s, w) (barycentric (1 - s - w, s, w)) over a lattice of the triangle with `m` intervals per side.
+template <class F> std::array<double, 3> lattice_minimum(F&& f, int m) noexcept {
+    std::array<double, 3> best{1.0, 0.0, 0.0};
+    double fbest = std::numeric_limits<double>::max();
+    for (int i = 0; i <= m; ++i)
+        for (int j = 0; i + j <= m; ++j) {
+            const double s = double(i) / m, w = double(j) / m, v = f(s, w);
+            if (v < fbest) fbest = v, best = {1.0 - s - w, s, w};
+        }
+    return best;
+}
+
+/// The deepest point of triangle (a, b, c) in the collider's solid grown by `grow` (m): whether it is inside
+/// (strictly, in double) and its barycentric coordinates.
+bool deepest(const Collider& col, float grow, V3 a, V3 b, V3 c, std::array<double, 3>& bary) noexcept {
+    if (col.kind == ColliderKind::disc) {
+        // The distance to the solid cylinder is at least the height above its top face (and below its bottom face):
+        // a triangle with every vertex that high is clear (the usual case for a cloth lying on a table).
+        const double top = col.centre[1], bottom = double(col.centre[1]) - col.size[1];
+        if (std::min({a.y, b.y, c.y}) - top >= grow || bottom - std::max({a.y, b.y, c.y}) >= grow) return false;
+    }
+    const V3 centroid = (1.0 / 3.0) * (a + b + c);
+    const double radius = std::max({norm(a - centroid), norm(b - centroid), norm(c - centroid)});
+    auto at = [&](double s, double w) { return a + s * (b - a) + w * (c - a); };
+    switch (col.kind) {
+    case ColliderKind::plane: {
+        const double da = solid_distance(col, a), db = solid_distance(col, b), dc = solid_distance(col, c);
+        const double m = std::min({da, db, dc});
+        bary = {m == da ? 1.0 : 0.0, m != da && m == db ? 1.0 : 0.0, m != da && m != db ? 1.0 : 0.0};
+        return m < grow;
+    }
+    case ColliderKind::sphere: {
+        const V3 cen = v3(col.centre);
+        if (norm(centroid - cen) - col.size[0] - grow > radius) return false;
+        bary = closest_on_triangle(cen, a, b, c);
+        return norm(at(bary[1], bary[2]) - cen) < double(col.size[0]) + grow;
+    }
+    case ColliderKind::ellipsoid: {
+        // Local frame (q = R^T (p - centre)) scaled by 1 / (semi-axes + grow): the grown ellipsoid is the unit ball.
+        const auto& R = col.rotation;
+        const double A[3] = {double(col.size[0]) + grow, double(col.size[1]) + grow, double(col.size[2]) + grow};
+        if (norm(centroid - v3(col.centre)) - std::max({A[0], A[1], A[2]}) > radius) return false;
+        auto scaled = [&](V3 p) {
+            const V3 w = p - v3(col.centre);
+            return V3{(R[0] * w.x + R[3] * w.y + R[6] * w.z) / A[0], (R[1] * w.x + R[4] * w.y + R[7] * w.z) / A[1],
+                      (R[2] * w.x + R[5] * w.y + R[8] * w.z) / A[2]};
+        };
+        const V3 sa = scaled(a), sb = scaled(b), sc = scaled(c);
+        bary = closest_on_triangle({0.0, 0.0, 0.0}, sa, sb, sc);
+        return norm(sa + bary[1] * (sb - sa) + bary[2] * (sc - sa)) < 1.0;
+    }
+    case ColliderKind::capsule: {
+        if (solid_distance(col, centroid) - grow > radius) return false;
+        bary = closest_to_segment(v3(col.centre), v3(col.axis), a, b, c);
+        return solid_distance(col, at(bary[1], bary[2])) < grow;
+    }
+    case ColliderKind::disc: {
+        if (solid_distance(col, centroid) - grow > radius) return false;
+        const double R = col.size[0], top = col.centre[1], bottom = double(col.centre[1]) - col.size[1];
+        auto within = [&](V3 p) {
+            return (p.x - col.centre[0]) * (p.x - col.centre[0]) + (p.z - col.centre[2]) * (p.z - col.centre[2]) <= R * R;
+        };
+        auto in_band = [&](V3 p) { return p.y >= bottom && p.y <= top; };
+        if (within(a) && within(b) && within(c) &&
+            ((a.y >= top && b.y >= top && c.y >= top) || (a.y <= bottom && b.y <= bottom && c.y <= bottom))) {
+            // Above the top face (or below the bottom) everywhere and within the radius: the distance is the height
+            // there, linear, so its minimum is a vertex.
+            const double da = solid_distance(col, a), db = solid_distance(col, b), dc = solid_distance(col, c);
+            const double m = std::min({da, db, dc});
+            bary = {m == da ? 1.0 : 0.0, m != da && m == db ? 1.0 : 0.0, m != da && m != db ? 1.0 : 0.0};
+            return m < grow;
+        }
+        if (in_band(a) && in_band(b) && in_band(c)) {
+            // Between the faces everywhere: the distance is the horizontal distance to the axis minus R, so the
+            // deepest point is the closest point of the triangle's horizontal projection to the axis.
+            auto flat = [](V3 p) { return V3{p.x, 0.0, p.z}; };
+            bary = closest_on_triangle({double(col.centre[0]), 0.0, double(col.centre[2])}, flat(a), flat(b), flat(c));
+        } else {
+            // Across a rim: the lattice minimum, its points closer than the rounded rim's radius (the margin; at
+            // least 1 mm), 6 to 48 intervals a side. The true minimum of this convex f is at most a second-order
+            // amount deeper (about (spacing / 2)^2 / (2 margin), ~10% of the margin).
+            const double spacing = std::max(double(grow), 1e-3);
+            const int m = std::clamp(int(std::ceil(2.0 * radius / spacing)), 4, 48);
+            // In float, relative to the disc's top centre (the lattice's many evaluations are the cost here).
+            const float R = col.size[0], h = col.size[1];
+            const V3 o = v3(col.centre);
+            const float ax = float(a.x - o.x), ay = float(a.y - o.y), az = float(a.z - o.z);
+            const float ux = float(b.x - a.x), uy = float(b.y - a.y), uz = float(b.z - a.z);
+            const float vx = float(c.x - a.x), vy = float(c.y - a.y), vz = float(c.z - a.z);
+            bary = lattice_minimum(
+                [&](double s, double w) {
+                    const float fs = float(s), fw = float(w);
+                    const float px = ax + fs * ux + fw * vx, py = ay + fs * uy + fw * vy, pz = az + fs * uz + fw * vz;
+                    const float r = std::sqrt(px * px + pz * pz);
+                    const float er = r - R, ey = std::max(py, -h - py); // > 0 outside the faces
+                    if (er <= 0.0f && ey <= 0.0f) return double(std::max(er, ey)); // inside: minus the depth
+                    const float pr = std::max(er, 0.0f), py2 = std::max(ey, 0.0f);
+                    return double(std::sqrt(pr * pr + py2 * py2));
+                },
+                m);
+        }
+        return solid_distance(col, at(bary[1], bary[2])) < grow;
+    }
+    }
+    return false;
+}
+
+} // namespace
+
+float clearance_bound(const Collider& col, Vec3f p) noexcept {
+    const float t = col.thickness;
+    const float dx = p[0] - col.centre[0], dy = p[1] - col.centre[1], dz = p[2] - col.centre[2];
+    switch (col.kind) {
+    case ColliderKind::plane:
+        return dx * col.axis[0] + dy * col.axis[1] + dz * col.axis[2] - t;
+    case ColliderKind::sphere:
+        return std::sqrt(dx * dx + dy * dy + dz * dz) - col.size[0] - t;
+    case ColliderKind::capsule:
+    case ColliderKind::disc:
+        return float(solid_distance(col, v3(p))) - t;
+    case ColliderKind::ellipsoid: {
+        const auto& R = col.rotation;
+        const float A[3] = {col.size[0] + t, col.size[1] + t, col.size[2] + t};
+        const float qx = (R[0] * dx + R[3] * dy + R[6] * dz) / A[0], qy = (R[1] * dx + R[4] * dy + R[7] * dz) / A[1],
+                    qz = (R[2] * dx + R[5] * dy + R[8] * dz) / A[2];
+        return std::min({A[0], A[1], A[2]}) * (std::sqrt(qx * qx + qy * qy + qz * qz) - 1.0f);
+    }
+    }
+    return 0.0f;
+}
+
+float enclosing_radius2(Vec3f a, Vec3f b, Vec3f c) noexcept {
+    auto d2 = [](const Vec3f& p, const Vec3f& q) {
+        return (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
+    };
+    const float ab = d2(a, b), bc = d2(b, c), ca = d2(c, a);
+    const float longest = std::max({ab, bc, ca});
+    if (2.0f * longest >= ab + bc + ca) return 0.25f * longest; // right or obtuse: the longest edge's midpoint
+    // Acute: the circumradius, R^2 = a^2 b^2 c^2 / (16 area^2) = ab bc ca / (4 |AB x AC|^2).
+    const float ux = b[0] - a[0], uy = b[1] - a[1], uz = b[2] - a[2], vx = c[0] - a[0], vy = c[1] - a[1],
+                vz = c[2] - a[2];
+    const float cx = uy * vz - uz * vy, cy = uz * vx - ux * vz, cz = ux * vy - uy * vx;
+    const float cross2 = cx * cx + cy * cy + cz * cz;
+    return cross2 > 0.0f ? std::min(ab * bc * ca / (4.0f * cross2), longest) : 0.25f * longest;
+}
+
+float core_measure(const Collider& col, Vec3f p) noexcept {
+    const float t = col.thickness;
+    float dx = p[0] - col.centre[0], dy = p[1] - col.centre[1], dz = p[2] - col.centre[2];
+    switch (col.kind) {
+    case ColliderKind::plane:
+        return 0.0f;
+    case ColliderKind::capsule: {
+        const float ax = col.axis[0] - col.centre[0], ay = col.axis[1] - col.centre[1], az = col.axis[2] - col.centre[2];
+        const float len2 = ax * ax + ay * ay + az * az;
+        const float u = len2 > 0.0f ? std::clamp((dx * ax + dy * ay + dz * az) / len2, 0.0f, 1.0f) : 0.0f;
+        dx -= u * ax, dy -= u * ay, dz -= u * az;
+        [[fallthrough]];
+    }
+    case ColliderKind::sphere:
+        return dx * dx + dy * dy + dz * dz;
+    case ColliderKind::ellipsoid: {
+        const auto& R = col.rotation;
+        const float qx = (R[0] * dx + R[3] * dy + R[6] * dz) / (col.size[0] + t),
+                    qy = (R[1] * dx + R[4] * dy + R[7] * dz) / (col.size[1] + t),
+                    qz = (R[2] * dx + R[5] * dy + R[8] * dz) / (col.size[2] + t);
+        return qx * qx + qy * qy + qz * qz;
+    }
+    case ColliderKind::disc:
+        return clearance_bound(col, p);
+    }
+    return 0.0f;
+}
+
+float clearance_from_measure(const Collider& col, float m) noexcept {
+    const float t = col.thickness;
+    switch (col.kind) {
+    case ColliderKind::plane:
+        return std::numeric_limits<float>::max();
+    case ColliderKind::sphere:
+    case ColliderKind::capsule:
+        return std::sqrt(m) - (col.size[0] + t);
+    case ColliderKind::ellipsoid:
+        return std::min({col.size[0], col.size[1], col.size[2]}) + t > 0.0f
+                   ? (std::min({col.size[0], col.size[1], col.size[2]}) + t) * (std::sqrt(m) - 1.0f)
+                   : 0.0f;
+    case ColliderKind::disc:
+        return m;
+    }
+    return 0.0f;
+}
+
+bool triangle_clear_of(const Collider& col, float m0, float m1, float m2, float radius2) noexcept {
+    const float t = col.thickness;
+    switch (col.kind) {
+    case ColliderKind::plane:
+        return true;
+    case ColliderKind::sphere:
+    case ColliderKind::capsule: {
+        const float rho = col.size[0] + t;
+        return std::min({m0, m1, m2}) - radius2 >= rho * rho;
+    }
+    case ColliderKind::ellipsoid: {
+        // Scaled by 1 / A (A = semi-axes + t) the inflated ellipsoid is the unit ball and no length grows by more
+        // than 1 / min A.
+        const float amin = std::min({col.size[0], col.size[1], col.size[2]}) + t;
+        return std::min({m0, m1, m2}) - radius2 / (amin * amin) >= 1.0f;
+    }
+    case ColliderKind::disc: {
+        const float far = std::max({m0, m1, m2});
+        return far > 0.0f && far * far >= 4.0f * radius2; // the diameter bounds every edge
+    }
+    }
+    return false;
+}
+
+TriangleContact triangle_contact(const Collider& col, Vec3f a, Vec3f b, Vec3f c) noexcept {
+    TriangleContact out;
+    if (col.kind == ColliderKind::plane) return out; // linear: the vertices decide
+    std::array<double, 3> bary{};
+    if (!deepest(col, col.thickness, v3(a), v3(b), v3(c), bary)) return out;
+    const Vec3f q{float(bary[0] * a[0] + bary[1] * b[0] + bary[2] * c[0]),
+                  float(bary[0] * a[1] + bary[1] * b[1] + bary[2] * c[1]),
+                  float(bary[0] * a[2] + bary[1] * b[2] + bary[2] * c[2])};
+    const Contact pr = project_point(col, q);
+    if (!pr.inside) return out; // inside in double, on the surface in float
+    out.inside = true;
+    out.barycentric = {float(bary[0]), float(bary[1]), float(bary[2])};
+    out.point = q;
+    out.surface = pr.point;
+    out.normal = pr.normal;
+    out.depth = (pr.point[0] - q[0]) * pr.normal[0] + (pr.point[1] - q[1]) * pr.normal[1] +
+                (pr.point[2] - q[2]) * pr.normal[2];
+    return out;
+}
+
+bool triangle_meets_collider(const Collider& col, Vec3f a, Vec3f b, Vec3f c, float margin) noexcept {
+    std::array<double, 3> bary{};
+    return deepest(col, margin, v3(a), v3(b), v3(c), bary);
+}
+
+} // namespace drape
