@@ -203,6 +203,9 @@ TEST(SceneMasks, BrokenFilesGiveClearErrors) {
         {scene(a, R"({"a": {"panel": "a", "path": [[0, 0]]}, "b": {"panel": "x", "path": [[0, 0]]}})"),
          "cloth.seams[0].b.panel = \"x\" is not a panel of this cloth (\"a\")"},
         {scene(a, R"({"a": {"panel": "a", "path": [[0, 0]]}})"), "cloth.seams[0].b is required"},
+        // A name with a control character is shown escaped: the message stays one line.
+        {scene(R"({"name": "a\nb", "rows": ["1"]})", R"({"a": {"panel": "x", "path": [[0, 0]]}, "b": {"panel": "x", "path": [[0, 0]]}})"),
+         "cloth.seams[0].a.panel = \"x\" is not a panel of this cloth (\"a\\u000ab\")"},
         {scene(a + ", " + b, seam("[[0, 0]]", "[[0, 0]]").insert(1, R"("rest_ratio": 3, )")),
          "cloth.seams[0].rest_ratio = 3 is outside the allowed range [0.01, 2]"},
     };

@@ -574,14 +574,16 @@ MaskPanelSpec read_mask_panel(ObjectReader& p) {
 /// One side of a seam (cloth.seams[k].a or .b): the panel by name and the path along its boundary.
 MaskEdgeSpec read_mask_edge(ObjectReader& e, const std::vector<MaskPanelSpec>& panels) {
     MaskEdgeSpec out;
-    std::string names;
-    for (const MaskPanelSpec& p : panels) names += (names.empty() ? "\"" : ", \"") + p.name + "\"";
+    std::string names; // the first 8, for messages
+    for (std::size_t k = 0; k < panels.size() && k < 8; ++k) names += (k ? ", \"" : "\"") + printable(panels[k].name, 64) + "\"";
+    if (panels.size() > 8) names += ", ... (" + std::to_string(panels.size()) + " panels)";
     const std::string name = e.text("panel", {}, "");
     if (name.empty()) e.fail(e.at("panel"), "is required: the name of a panel (" + names + ")");
     const auto it = std::find_if(panels.begin(), panels.end(), [&](const MaskPanelSpec& p) { return p.name == name; });
     if (it == panels.end()) e.fail(e.at("panel"), "= \"" + printable(name, 60) + "\" is not a panel of this cloth (" + names + ")");
     out.panel = static_cast<std::uint32_t>(it - panels.begin());
     const MaskPanel& mask = it->mask;
+    const std::string shown = printable(name, 64); // the name as messages show it (no control characters)
     const json* path = e.array("path", 4096);
     if (!path || path->empty())
         e.fail(e.at("path"), "must list 1 to 4096 cells [row, column]: the edge's first cell, its corners, its last cell");
@@ -599,10 +601,10 @@ MaskEdgeSpec read_mask_edge(ObjectReader& e, const std::vector<MaskPanelSpec>& p
     std::set<std::pair<std::uint32_t, std::uint32_t>> seen;
     for (const auto& [r, c] : mask_edge_cells(out)) {
         if (mask.rows[r][c] != '1')
-            e.fail(e.at("path"), "passes cell " + cell_text(r, c) + " of panel \"" + name +
+            e.fail(e.at("path"), "passes cell " + cell_text(r, c) + " of panel \"" + shown +
                                      "\", a '0' (an edge runs along particles)");
         if (!mask_cell_on_boundary(mask, r, c))
-            e.fail(e.at("path"), "passes cell " + cell_text(r, c) + ", inside panel \"" + name +
+            e.fail(e.at("path"), "passes cell " + cell_text(r, c) + ", inside panel \"" + shown +
                                      "\": an edge runs along the panel's boundary");
         if (!seen.insert({r, c}).second)
             e.fail(e.at("path"), "passes cell " + cell_text(r, c) + " twice");
@@ -1194,7 +1196,7 @@ void build_mask_cloth(const SceneSpec& s, BuiltScene& out) {
         try {
             panels.push_back(add_mask_panel(a, p.mask, p.cell_size, float(density * h * h), mask_frame(p, origin)));
         } catch (const InvalidInput& e) {
-            throw InvalidInput(s.source + ": cloth.panels[" + std::to_string(k) + "] \"" + p.name + "\": " + e.what());
+            throw InvalidInput(s.source + ": cloth.panels[" + std::to_string(k) + "] \"" + printable(p.name, 64) + "\": " + e.what());
         }
     }
     const std::vector<double> lumped = lumped_masses(a.x, a.y, a.z, a.triangles, density);
