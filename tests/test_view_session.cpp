@@ -856,6 +856,10 @@ TEST(ViewSession, OutlineAndMaskScenesHaveTheCLIsMassesAndResolution) {
     SceneSpec springs = load_scene(tank);
     springs.model = MaterialModel::springs;
     same_masses(m, springs);
+    // File > Save scene: the saved mask scene builds the cloth the viewer runs (masses, springs).
+    const BuiltScene saved = build_scene(parse_scene(scene_to_json(m.current_spec()), "saved.json"));
+    EXPECT_EQ(saved.cloth.free_inv_mass, m.sim().cloth().free_inv_mass);
+    EXPECT_EQ(saved.cloth.edges.size(), m.sim().cloth().edges.size());
     m.advance();
     EXPECT_TRUE(m.sim().health().finite);
 }
