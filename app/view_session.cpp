@@ -40,13 +40,19 @@ float spec_total_mass(const SceneSpec& s) {
 /// (kg/m^2); null for a grid or the T-shirt.
 float* areal_density(SceneSpec& s) {
     switch (s.cloth) {
-    case ClothType::outline: return &s.outline.density;
-    case ClothType::mask: return &s.masks.density;
-    case ClothType::mesh: return &s.mesh.density;
-    default: return nullptr;
+    case ClothType::outline:
+        return &s.outline.density;
+    case ClothType::mask:
+        return &s.masks.density;
+    case ClothType::mesh:
+        return &s.mesh.density;
+    default:
+        return nullptr;
     }
 }
-bool density_masses(const SceneSpec& s) { return areal_density(const_cast<SceneSpec&>(s)) != nullptr; }
+bool density_masses(const SceneSpec& s) {
+    return areal_density(const_cast<SceneSpec&>(s)) != nullptr;
+}
 
 /// Automatic substeps: 1/60 s per frame, capped at view_auto_budget particle-substeps (at least 10).
 int auto_substeps_for(std::size_t particles, double dt) {
@@ -73,15 +79,20 @@ SceneSpec sized_spec(SceneSpec spec, std::uint32_t size) {
 /// mask cell, a mesh's mean edge length.
 float view_spacing(const SceneSpec& spec, const Cloth& cloth) {
     switch (spec.cloth) {
-    case ClothType::grid: return spec.grid.size / float(std::max<std::uint32_t>(spec.grid.n, 2) - 1);
-    case ClothType::tshirt: return 1.0f / spec.tshirt.cells_per_metre;
-    case ClothType::outline: return spec.outline.spacing;
+    case ClothType::grid:
+        return spec.grid.size / float(std::max<std::uint32_t>(spec.grid.n, 2) - 1);
+    case ClothType::tshirt:
+        return 1.0f / spec.tshirt.cells_per_metre;
+    case ClothType::outline:
+        return spec.outline.spacing;
     case ClothType::mask: {
         float h = INFINITY;
-        for (const MaskPanelSpec& p : spec.masks.panels) h = std::min(h, p.cell_size);
+        for (const MaskPanelSpec& p : spec.masks.panels)
+            h = std::min(h, p.cell_size);
         return h;
     }
-    case ClothType::mesh: break;
+    case ClothType::mesh:
+        break;
     }
     double sum = 0.0;
     std::size_t n = 0;
@@ -205,9 +216,9 @@ ViewSession::Snapshot ViewSession::settings_for(SceneSpec spec, std::optional<st
         if (size) {
             if (spec.cloth != ClothType::mesh && spec.cloth != ClothType::mask &&
                 (*size < view_min_cells || *size > view_max_cells))
-                throw InvalidInput("--size: value " + std::to_string(*size) +
-                                   " is outside the allowed range [" + std::to_string(view_min_cells) + ", " +
-                                   std::to_string(view_max_cells) + "] (cells per metre of the " +
+                throw InvalidInput("--size: value " + std::to_string(*size) + " is outside the allowed range [" +
+                                   std::to_string(view_min_cells) + ", " + std::to_string(view_max_cells) +
+                                   "] (cells per metre of the " +
                                    (spec.cloth == ClothType::outline ? "outline" : "T-shirt") + ")");
             set_scene_resolution(spec, *size, "--size");
         }
@@ -222,9 +233,9 @@ ViewSession::Snapshot ViewSession::settings_for(SceneSpec spec, std::optional<st
     t.fabric.fabric = spec.fabric;
     // Node mass: the scene's total over its particles (set exactly in build(), once the count is known; a
     // density-mass cloth's there, from its masses).
-    t.fabric.node_mass_g = density_masses(spec) ? view_min_node_mass_g
-                                                : 1000.0f * t.total_mass /
-                                                      float(std::max<std::size_t>(1, scene_particle_count(spec)));
+    t.fabric.node_mass_g = density_masses(spec)
+                               ? view_min_node_mass_g
+                               : 1000.0f * t.total_mass / float(std::max<std::size_t>(1, scene_particle_count(spec)));
     t.params = spec.physics;
     // The scene's dt is the implicit step or the explicit substep, whichever solver it runs; the other one's is
     // automatic.
@@ -283,8 +294,8 @@ double ViewSession::bound_for(const FabricSettings& f, float air_drag, const Aer
     probe.inv_mass.reset(c.padded_count);
     const float inv = 1.0f / (f.node_mass_g * 1e-3f);
     // A fabric's or a density-mass cloth's own masses (the springs model's scaled to the new mean node mass).
-    const bool own_masses = (f.model == MaterialModel::fabric || density_masses(spec_)) &&
-                            c.free_inv_mass.size() == c.particle_count;
+    const bool own_masses =
+        (f.model == MaterialModel::fabric || density_masses(spec_)) && c.free_inv_mass.size() == c.particle_count;
     const float scale = f.model == MaterialModel::springs ? fabric_.node_mass_g / f.node_mass_g : 1.0f;
     for (std::size_t i = 0; i < c.particle_count; ++i)
         probe.inv_mass[i] = own_masses ? c.free_inv_mass[i] * scale : inv;
@@ -331,7 +342,8 @@ ViewSession::Built ViewSession::build(Snapshot t, const KeepState* keep_state, b
         // Density x area, as build_scene gave them (the CLI's masses): the node mass shown is their mean, and the
         // damping uses it (as build_scene's cook does).
         double total = 0.0;
-        for (std::size_t i = 0; i < cloth.particle_count; ++i) total += 1.0 / double(cloth.free_inv_mass[i]);
+        for (std::size_t i = 0; i < cloth.particle_count; ++i)
+            total += 1.0 / double(cloth.free_inv_mass[i]);
         t.total_mass = static_cast<float>(total);
         t.fabric.node_mass_g = static_cast<float>(1000.0 * total / double(cloth.particle_count));
         apply_materials(cloth, materials(t.fabric));
@@ -778,9 +790,9 @@ void ViewSession::set_scene(const std::string& name_or_path) {
 
 void ViewSession::set_size(std::uint32_t n) {
     if (!resizable()) {
-        post(MessageLevel::warning, std::string("refused: a ") +
-                                        (spec_.cloth == ClothType::mesh ? "mesh's resolution is its OBJ file's"
-                                                                        : "mask cloth's resolution is its masks' cells"));
+        post(MessageLevel::warning, std::string("refused: a ") + (spec_.cloth == ClothType::mesh
+                                                                      ? "mesh's resolution is its OBJ file's"
+                                                                      : "mask cloth's resolution is its masks' cells"));
         return;
     }
     if (grid_scene())

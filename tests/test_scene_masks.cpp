@@ -26,7 +26,9 @@ std::string error_of(const std::string& json) {
     return "";
 }
 
-bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+bool has(const std::string& text, const std::string& part) {
+    return text.find(part) != std::string::npos;
+}
 
 /// A springs-model mask scene: two 4 x 5 panels facing each other 5 cm apart (the back one mirrored), sewn along
 /// their left and right columns (a tube), the front panel's top row pinned, the back's cell (0, 2) pinned by list,
@@ -59,10 +61,12 @@ TEST(SceneMasks, BoundaryRuleMatchesTheMesh) {
         MaskPanel mask;
         for (int r = 0; r < rows; ++r) {
             std::string row;
-            for (int c = 0; c < columns; ++c) row += rng() % 4 == 0 ? '0' : '1';
+            for (int c = 0; c < columns; ++c)
+                row += rng() % 4 == 0 ? '0' : '1';
             mask.rows.push_back(row);
         }
-        if (std::none_of(mask.rows.begin(), mask.rows.end(), [](const std::string& r) { return r.find('1') != std::string::npos; }))
+        if (std::none_of(mask.rows.begin(), mask.rows.end(),
+                         [](const std::string& r) { return r.find('1') != std::string::npos; }))
             mask.rows[0][0] = '1';
         GarmentAssembly a;
         const MaskPanelBuild b = add_mask_panel(a, mask, 0.1f, 0.001f);
@@ -73,7 +77,12 @@ TEST(SceneMasks, BoundaryRuleMatchesTheMesh) {
                 const bool expected = i >= 0 && boundary.count(std::uint32_t(i)) > 0;
                 ASSERT_EQ(mask_cell_on_boundary(mask, r, c), expected)
                     << "trial " << trial << " cell (" << r << ", " << c << ") of\n"
-                    << [&] { std::string s; for (auto& row : mask.rows) s += row + "\n"; return s; }();
+                    << [&] {
+                           std::string s;
+                           for (auto& row : mask.rows)
+                               s += row + "\n";
+                           return s;
+                       }();
             }
     }
 }
@@ -108,7 +117,8 @@ TEST(SceneMasks, PanelsMassesSeamsAndPins) {
     // Masses: density x the triangles' area: 3 x 3 full cells below row 1, and above it one full cell and two with
     // three corners (half a cell each) beside the top row's two particles.
     double total = 0.0;
-    for (float inv : c.free_inv_mass) total += 1.0 / double(inv);
+    for (float inv : c.free_inv_mass)
+        total += 1.0 / double(inv);
     const double h = 0.05, cells_per_panel = 9.0 + 1.0 + 2 * 0.5; // full cells; the two cells beside the top pair
     EXPECT_NEAR(total, 2.0 * 0.2 * cells_per_panel * h * h, 1e-7);
     // Seams: 4 + 4 pairs, rest = ratio x h.
@@ -135,7 +145,8 @@ TEST(SceneMasks, FabricMassesComeFromTheFabricsDensity) {
     text.replace(text.find("{ \"stiffness\": 2000 }"), 21, "\"denim\"");
     const BuiltScene b = build_scene(parse_scene(text, "tube.json"));
     double total = 0.0;
-    for (float inv : b.cloth.free_inv_mass) total += 1.0 / double(inv);
+    for (float inv : b.cloth.free_inv_mass)
+        total += 1.0 / double(inv);
     const double denim = double(find_fabric("denim")->density);
     EXPECT_NEAR(total, 2.0 * denim * 11.0 * 0.05 * 0.05, 1e-6 * total);
     // A density beside a fabric is a second answer: refused.
@@ -151,7 +162,8 @@ TEST(SceneMasks, TankTopExampleIsSewnWithDensityMasses) {
     EXPECT_EQ(b.cloth.seams.a.size(), 6u + 6u + 25u + 25u);
     EXPECT_GT(b.params.colliders.size(), 7u); // the body and the ground
     double total = 0.0, area = 0.0;
-    for (float inv : b.cloth.free_inv_mass) total += 1.0 / double(inv);
+    for (float inv : b.cloth.free_inv_mass)
+        total += 1.0 / double(inv);
     for (const MaskPanelSpec& p : spec.masks.panels) // a cell with 4 corners is two triangles, with 3 one
         for (std::size_t r = 0; r + 1 < p.mask.rows.size(); ++r)
             for (std::size_t c = 0; c + 1 < p.mask.rows[r].size(); ++c) {
@@ -173,38 +185,48 @@ TEST(SceneMasks, BrokenFilesGiveClearErrors) {
         return R"({"a": {"panel": "a", "path": )" + pa + R"(}, "b": {"panel": "b", "path": )" + pb + "}}";
     };
     const std::pair<std::string, std::string> cases[] = {
-        {scene(R"({"name": "a", "rows": ["111", "11"]})"),
-         "test.json: cloth.panels[0].rows[1] has 2 characters but cloth.panels[0].rows[0] has 3 (a mask is rectangular"},
-        {scene(R"({"name": "a", "rows": ["1 1"]})"), "cloth.panels[0].rows[0] column 1 holds ' '; only '0' and '1' are allowed"},
+        {scene(R"({"name": "a", "rows": ["111", "11"]})"), "test.json: cloth.panels[0].rows[1] has 2 characters but "
+                                                           "cloth.panels[0].rows[0] has 3 (a mask is rectangular"},
+        {scene(R"({"name": "a", "rows": ["1 1"]})"),
+         "cloth.panels[0].rows[0] column 1 holds ' '; only '0' and '1' are allowed"},
         {scene(R"({"name": "a", "rows": ["1\u00e91"]})"), "cloth.panels[0].rows[0] column 1 holds byte 0xc3"},
-        {scene(a + R"(, {"name": "b", "rows": ["00"]})"), "cloth.panels[1].rows holds no '1': a panel needs at least one particle"},
+        {scene(a + R"(, {"name": "b", "rows": ["00"]})"),
+         "cloth.panels[1].rows holds no '1': a panel needs at least one particle"},
         {scene(R"({"name": "a", "rows": []})"), "cloth.panels[0].rows must list 1 to 4096 rows"},
         {scene(R"({"name": "a", "rows": [""]})"), "cloth.panels[0].rows[0] has 0 characters; allowed 1 to 4096"},
         {scene(R"({"rows": ["1"]})"), "cloth.panels[0].name is required"},
         {scene(a + ", " + a), "cloth.panels[1].name = \"a\" names an earlier panel too"},
-        {scene(R"({"name": "a", "rows": ["1"], "cell_size": 0})"), "cloth.panels[0].cell_size = 0 is outside the allowed range [0.001, 1] m"},
-        {scene(R"({"name": "a", "rows": ["1"], "axis_v": [1, 0.1, 0]})"), "cloth.panels[0].axis_v is not perpendicular to cloth.panels[0].axis_u"},
+        {scene(R"({"name": "a", "rows": ["1"], "cell_size": 0})"),
+         "cloth.panels[0].cell_size = 0 is outside the allowed range [0.001, 1] m"},
+        {scene(R"({"name": "a", "rows": ["1"], "axis_v": [1, 0.1, 0]})"),
+         "cloth.panels[0].axis_v is not perpendicular to cloth.panels[0].axis_u"},
         {scene(R"({"name": "a", "rows": ["1"], "axis_u": [0, 0, 0]})"), "cloth.panels[0].axis_u has length 0"},
         {scene(R"({"name": "a", "rows": ["10"], "pins": [[0, 1]]})"), "cloth.panels[0].pins[0] = [0, 1] is a '0' cell"},
-        {scene(R"({"name": "a", "rows": ["10"], "pins": "bottom"})"), "cloth.panels[0].pins = \"bottom\" is not one of \"none\", \"top_row\""},
+        {scene(R"({"name": "a", "rows": ["10"], "pins": "bottom"})"),
+         "cloth.panels[0].pins = \"bottom\" is not one of \"none\", \"top_row\""},
         {scene(R"({"name": "a", "rows": ["1"], "colour": 1})"), "cloth.panels[0].colour is not a known field"},
         {scene("", ""), "cloth.panels must list 1 to 256 panels"},
         {scene(a + ", " + b, seam("[[0, 0], [0, 2]]", "[[0, 0], [0, 1]]")),
-         "cloth.seams[0].b.path has 2 cells but cloth.seams[0].a.path has 3; a seam joins two edges cell to cell, so they must have equal lengths"},
+         "cloth.seams[0].b.path has 2 cells but cloth.seams[0].a.path has 3; a seam joins two edges cell to cell, so "
+         "they must have equal lengths"},
         {scene(a + ", " + b, seam("[[1, 0], [1, 2]]", "[[0, 0], [0, 2]]")),
          "cloth.seams[0].a.path passes cell [1, 1], inside panel \"a\": an edge runs along the panel's boundary"},
         {scene(a + ", " + b, seam("[[0, 0], [2, 1]]", "[[0, 0], [2, 1]]")),
          "cloth.seams[0].a.path[1] is not on the same row, column or 45-degree diagonal as cloth.seams[0].a.path[0]"},
         {scene(a + ", " + b, seam("[[0, 0], [0, 3]]", "[[0, 0], [0, 2]]")),
          "cloth.seams[0].a.path[1] = [0, 3] is outside the mask (rows [0, 2], columns [0, 2])"},
-        {scene(a + ", " + b, seam("[[0, 0], [0, 0]]", "[[0, 0], [0, 2]]")), "cloth.seams[0].a.path[1] repeats the cell before it"},
-        {scene(a + ", " + b, seam("[[0, 0], [0, 2], [0, 1]]", "[[0, 0], [0, 2], [0, 1]]")), "cloth.seams[0].a.path passes cell [0, 1] twice"},
-        {scene(a + R"(, {"name": "b", "rows": ["101"]})", seam("[[0, 0]]", "[[0, 0], [0, 2]]")), "cloth.seams[0].b.path passes cell [0, 1] of panel \"b\", a '0'"},
+        {scene(a + ", " + b, seam("[[0, 0], [0, 0]]", "[[0, 0], [0, 2]]")),
+         "cloth.seams[0].a.path[1] repeats the cell before it"},
+        {scene(a + ", " + b, seam("[[0, 0], [0, 2], [0, 1]]", "[[0, 0], [0, 2], [0, 1]]")),
+         "cloth.seams[0].a.path passes cell [0, 1] twice"},
+        {scene(a + R"(, {"name": "b", "rows": ["101"]})", seam("[[0, 0]]", "[[0, 0], [0, 2]]")),
+         "cloth.seams[0].b.path passes cell [0, 1] of panel \"b\", a '0'"},
         {scene(a, R"({"a": {"panel": "a", "path": [[0, 0]]}, "b": {"panel": "x", "path": [[0, 0]]}})"),
          "cloth.seams[0].b.panel = \"x\" is not a panel of this cloth (\"a\")"},
         {scene(a, R"({"a": {"panel": "a", "path": [[0, 0]]}})"), "cloth.seams[0].b is required"},
         // A name with a control character is shown escaped: the message stays one line.
-        {scene(R"({"name": "a\nb", "rows": ["1"]})", R"({"a": {"panel": "x", "path": [[0, 0]]}, "b": {"panel": "x", "path": [[0, 0]]}})"),
+        {scene(R"({"name": "a\nb", "rows": ["1"]})",
+               R"({"a": {"panel": "x", "path": [[0, 0]]}, "b": {"panel": "x", "path": [[0, 0]]}})"),
          "cloth.seams[0].a.panel = \"x\" is not a panel of this cloth (\"a\\u000ab\")"},
         {scene(a + ", " + b, seam("[[0, 0]]", "[[0, 0]]").insert(1, R"("rest_ratio": 3, )")),
          "cloth.seams[0].rest_ratio = 3 is outside the allowed range [0.01, 2]"},
@@ -217,8 +239,10 @@ TEST(SceneMasks, BrokenFilesGiveClearErrors) {
     }
     // More than 4096 rows: refused before anything is built.
     std::string rows;
-    for (int k = 0; k < 4097; ++k) rows += std::string(k ? "," : "") + "\"1\"";
-    EXPECT_TRUE(has(error_of(scene(R"({"name": "a", "rows": [)" + rows + "]}")), "cloth.panels[0].rows has 4097 entries (at most 4096)"));
+    for (int k = 0; k < 4097; ++k)
+        rows += std::string(k ? "," : "") + "\"1\"";
+    EXPECT_TRUE(has(error_of(scene(R"({"name": "a", "rows": [)" + rows + "]}")),
+                    "cloth.panels[0].rows has 4097 entries (at most 4096)"));
 }
 
 // load -> save -> load gives the same cloth: particles, positions, masses, pins, springs (kind, ends, rest).
@@ -237,12 +261,15 @@ TEST(SceneMasks, RoundTripThroughSceneFiles) {
         EXPECT_EQ(a.initial.y, b.initial.y);
         EXPECT_EQ(a.initial.z, b.initial.z);
         EXPECT_EQ(a.cloth.free_inv_mass, b.cloth.free_inv_mass);
-        for (std::size_t i = 0; i < a.cloth.particle_count; ++i) ASSERT_EQ(a.cloth.inv_mass[i], b.cloth.inv_mass[i]) << i;
+        for (std::size_t i = 0; i < a.cloth.particle_count; ++i)
+            ASSERT_EQ(a.cloth.inv_mass[i], b.cloth.inv_mass[i]) << i;
         ASSERT_EQ(a.cloth.edges.size(), b.cloth.edges.size());
         for (std::size_t k = 0; k < a.cloth.edges.size(); ++k) {
             const Edge& ea = a.cloth.edges[k];
             const Edge& eb = b.cloth.edges[k];
-            ASSERT_TRUE(ea.a == eb.a && ea.b == eb.b && ea.kind == eb.kind && ea.rest == eb.rest && ea.scale == eb.scale) << k;
+            ASSERT_TRUE(ea.a == eb.a && ea.b == eb.b && ea.kind == eb.kind && ea.rest == eb.rest &&
+                        ea.scale == eb.scale)
+                << k;
         }
         EXPECT_EQ(a.cloth.triangles, b.cloth.triangles);
         EXPECT_EQ(a.params.dt, b.params.dt);
@@ -252,7 +279,8 @@ TEST(SceneMasks, RoundTripThroughSceneFiles) {
 // --size (and the viewer's resolution slider) through one rule: grid n, T-shirt and outline cells per metre,
 // refused for a mesh or a mask cloth.
 TEST(SceneMasks, ResolutionRule) {
-    SceneSpec outline = parse_scene(R"({"cloth": {"type": "outline", "outline": [[0,0],[0.3,0],[0,0.3]], "spacing": 0.025}})", "o.json");
+    SceneSpec outline = parse_scene(
+        R"({"cloth": {"type": "outline", "outline": [[0,0],[0.3,0],[0,0.3]], "spacing": 0.025}})", "o.json");
     EXPECT_EQ(scene_resolution(outline), 40u);
     const std::size_t before = build_scene(outline).cloth.particle_count;
     set_scene_resolution(outline, 80);
@@ -263,9 +291,12 @@ TEST(SceneMasks, ResolutionRule) {
         set_scene_resolution(outline, 5, "--size");
         FAIL();
     } catch (const InvalidInput& e) {
-        EXPECT_TRUE(has(e.what(), "--size: value 5 is outside the allowed range [10, 1000] (cells per metre of the outline")) << e.what();
+        EXPECT_TRUE(
+            has(e.what(), "--size: value 5 is outside the allowed range [10, 1000] (cells per metre of the outline"))
+            << e.what();
     }
-    SceneSpec big = parse_scene(R"({"cloth": {"type": "outline", "outline": [[0,0],[50,0],[0,50]], "spacing": 0.1}})", "big.json");
+    SceneSpec big =
+        parse_scene(R"({"cloth": {"type": "outline", "outline": [[0,0],[50,0],[0,50]], "spacing": 0.1}})", "big.json");
     try {
         set_scene_resolution(big, 1000, "--size");
         FAIL();

@@ -80,7 +80,8 @@ void expect_same_spec(const SceneSpec& a, const SceneSpec& b, const std::string&
         ASSERT_EQ(a.masks.seams.size(), b.masks.seams.size()) << what;
         for (std::size_t k = 0; k < a.masks.seams.size(); ++k) {
             const MaskSeamSpec &p = a.masks.seams[k], &q = b.masks.seams[k];
-            EXPECT_TRUE(p.a.panel == q.a.panel && p.a.path == q.a.path && p.b.panel == q.b.panel && p.b.path == q.b.path)
+            EXPECT_TRUE(p.a.panel == q.a.panel && p.a.path == q.a.path && p.b.panel == q.b.panel &&
+                        p.b.path == q.b.path)
                 << what;
             EXPECT_TRUE(same_bits(p.rest_ratio, q.rest_ratio)) << what;
         }

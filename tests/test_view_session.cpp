@@ -792,8 +792,10 @@ TEST(ViewSession, OutlineAndMaskScenesHaveTheCLIsMassesAndResolution) {
     {
         FILE* f = std::fopen(path.c_str(), "w");
         ASSERT_NE(f, nullptr);
-        std::fputs(R"({"scene": "tri", "cloth": {"type": "outline", "outline": [[0,0],[0.3,0],[0,0.3]], "spacing": 0.025,
-                       "density": 0.2, "plane": "vertical", "pins": "top_edge"}, "material": {"stiffness": 1000}})", f);
+        std::fputs(
+            R"({"scene": "tri", "cloth": {"type": "outline", "outline": [[0,0],[0.3,0],[0,0.3]], "spacing": 0.025,
+                       "density": 0.2, "plane": "vertical", "pins": "top_edge"}, "material": {"stiffness": 1000}})",
+            f);
         std::fclose(f);
     }
     const auto same_masses = [](const ViewSession& s, const SceneSpec& spec) {
@@ -811,7 +813,8 @@ TEST(ViewSession, OutlineAndMaskScenesHaveTheCLIsMassesAndResolution) {
         }
         EXPECT_NEAR(s.fabric().node_mass_g, 1000.0 * total / double(c.particle_count), 1e-6);
         for (std::size_t k = 0; k < spring_kind_count; ++k)
-            EXPECT_NEAR(c.material[k].damping, cli.cloth.material[k].damping, 1e-5 * cli.cloth.material[k].damping) << k;
+            EXPECT_NEAR(c.material[k].damping, cli.cloth.material[k].damping, 1e-5 * cli.cloth.material[k].damping)
+                << k;
         return total;
     };
     ViewSession s(path, std::nullopt, 1, std::nullopt);

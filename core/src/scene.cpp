@@ -451,7 +451,8 @@ PanelFrame mask_frame(const MaskPanelSpec& p, const std::array<double, 3>& cloth
     };
     f.axis_u = unit(p.axis_u);
     f.axis_v = unit(p.axis_v);
-    for (int k = 0; k < 3; ++k) f.origin[k] = static_cast<float>(p.origin[k] - cloth_origin[k]);
+    for (int k = 0; k < 3; ++k)
+        f.origin[k] = static_cast<float>(p.origin[k] - cloth_origin[k]);
     return f;
 }
 
@@ -483,15 +484,16 @@ std::string cell_text(std::int64_t row, std::int64_t column) {
 std::array<std::uint32_t, 2> read_cell(const ObjectReader& r, const json& v, const std::string& where,
                                        const MaskPanel& mask) {
     const std::size_t rows = mask.rows.size(), columns = mask.rows[0].size();
-    const std::string range = "rows [0, " + std::to_string(rows - 1) + "], columns [0, " +
-                              std::to_string(columns - 1) + "]";
-    for (const std::string& w : {where, where + "[0]", where + "[1]"}) r.check_finite(w, range);
+    const std::string range =
+        "rows [0, " + std::to_string(rows - 1) + "], columns [0, " + std::to_string(columns - 1) + "]";
+    for (const std::string& w : {where, where + "[0]", where + "[1]"})
+        r.check_finite(w, range);
     if (!v.is_array() || v.size() != 2 || !v[0].is_number_unsigned() || !v[1].is_number_unsigned())
         r.fail(where, "must be a cell [row, column] (whole numbers; " + range + ")");
     const std::uint64_t row = v[0].get<std::uint64_t>(), column = v[1].get<std::uint64_t>();
     if (row >= rows || column >= columns)
-        r.fail(where, "= [" + std::to_string(row) + ", " + std::to_string(column) + "] is outside the mask (" + range +
-                          ")");
+        r.fail(where,
+               "= [" + std::to_string(row) + ", " + std::to_string(column) + "] is outside the mask (" + range + ")");
     return {static_cast<std::uint32_t>(row), static_cast<std::uint32_t>(column)};
 }
 
@@ -499,7 +501,8 @@ std::array<std::uint32_t, 2> read_cell(const ObjectReader& r, const json& v, con
 std::array<float, 3> read_axis(ObjectReader& p, const std::string& key, std::array<float, 3> fallback) {
     const std::array<float, 3> a = p.vec3(key, 1e6, "", fallback);
     const double len = std::sqrt(double(a[0]) * a[0] + double(a[1]) * a[1] + double(a[2]) * a[2]);
-    if (!(len >= 1e-6)) p.fail(p.at(key), "has length " + format_number(len) + "; an axis needs a length of at least 1e-6");
+    if (!(len >= 1e-6))
+        p.fail(p.at(key), "has length " + format_number(len) + "; an axis needs a length of at least 1e-6");
     return a;
 }
 
@@ -521,11 +524,12 @@ MaskPanelSpec read_mask_panel(ObjectReader& p) {
         if (!v.is_string()) p.fail(where, "must be a string of '0' and '1' characters");
         const std::string& row = v.get_ref<const std::string&>();
         if (row.empty() || row.size() > mask_max_side)
-            p.fail(where, "has " + std::to_string(row.size()) + " characters; allowed 1 to " +
-                              std::to_string(mask_max_side));
+            p.fail(where,
+                   "has " + std::to_string(row.size()) + " characters; allowed 1 to " + std::to_string(mask_max_side));
         if (r > 0 && row.size() != out.mask.rows[0].size())
             p.fail(where, "has " + std::to_string(row.size()) + " characters but " + p.at("rows") + "[0] has " +
-                              std::to_string(out.mask.rows[0].size()) + " (a mask is rectangular: rows of equal length)");
+                              std::to_string(out.mask.rows[0].size()) +
+                              " (a mask is rectangular: rows of equal length)");
         for (std::size_t c = 0; c < row.size(); ++c) {
             if (row[c] == '1') {
                 ++ones;
@@ -575,18 +579,21 @@ MaskPanelSpec read_mask_panel(ObjectReader& p) {
 MaskEdgeSpec read_mask_edge(ObjectReader& e, const std::vector<MaskPanelSpec>& panels) {
     MaskEdgeSpec out;
     std::string names; // the first 8, for messages
-    for (std::size_t k = 0; k < panels.size() && k < 8; ++k) names += (k ? ", \"" : "\"") + printable(panels[k].name, 64) + "\"";
+    for (std::size_t k = 0; k < panels.size() && k < 8; ++k)
+        names += (k ? ", \"" : "\"") + printable(panels[k].name, 64) + "\"";
     if (panels.size() > 8) names += ", ... (" + std::to_string(panels.size()) + " panels)";
     const std::string name = e.text("panel", {}, "");
     if (name.empty()) e.fail(e.at("panel"), "is required: the name of a panel (" + names + ")");
     const auto it = std::find_if(panels.begin(), panels.end(), [&](const MaskPanelSpec& p) { return p.name == name; });
-    if (it == panels.end()) e.fail(e.at("panel"), "= \"" + printable(name, 60) + "\" is not a panel of this cloth (" + names + ")");
+    if (it == panels.end())
+        e.fail(e.at("panel"), "= \"" + printable(name, 60) + "\" is not a panel of this cloth (" + names + ")");
     out.panel = static_cast<std::uint32_t>(it - panels.begin());
     const MaskPanel& mask = it->mask;
     const std::string shown = printable(name, 64); // the name as messages show it (no control characters)
     const json* path = e.array("path", 4096);
     if (!path || path->empty())
-        e.fail(e.at("path"), "must list 1 to 4096 cells [row, column]: the edge's first cell, its corners, its last cell");
+        e.fail(e.at("path"),
+               "must list 1 to 4096 cells [row, column]: the edge's first cell, its corners, its last cell");
     for (std::size_t k = 0; k < path->size(); ++k) {
         const std::string where = e.at("path") + "[" + std::to_string(k) + "]";
         out.path.push_back(read_cell(e, (*path)[k], where, mask));
@@ -606,8 +613,7 @@ MaskEdgeSpec read_mask_edge(ObjectReader& e, const std::vector<MaskPanelSpec>& p
         if (!mask_cell_on_boundary(mask, r, c))
             e.fail(e.at("path"), "passes cell " + cell_text(r, c) + ", inside panel \"" + shown +
                                      "\": an edge runs along the panel's boundary");
-        if (!seen.insert({r, c}).second)
-            e.fail(e.at("path"), "passes cell " + cell_text(r, c) + " twice");
+        if (!seen.insert({r, c}).second) e.fail(e.at("path"), "passes cell " + cell_text(r, c) + " twice");
     }
     e.finish();
     return out;
@@ -621,15 +627,18 @@ void read_mask_cloth(ObjectReader& cloth, SceneSpec& s) {
     if (!panels || panels->empty()) cloth.fail(cloth.at("panels"), "must list 1 to 256 panels");
     std::size_t particles = 0;
     for (std::size_t k = 0; k < panels->size(); ++k) {
-        ObjectReader p((*panels)[k], cloth.at("panels") + "[" + std::to_string(k) + "]", cloth.source(), cloth.non_finite());
+        ObjectReader p((*panels)[k], cloth.at("panels") + "[" + std::to_string(k) + "]", cloth.source(),
+                       cloth.non_finite());
         MaskPanelSpec panel = read_mask_panel(p);
         for (const MaskPanelSpec& other : m.panels)
             if (other.name == panel.name)
-                p.fail(p.at("name"), "= \"" + printable(panel.name, 60) + "\" names an earlier panel too (names are unique)");
-        for (const std::string& row : panel.mask.rows) particles += std::size_t(std::count(row.begin(), row.end(), '1'));
+                p.fail(p.at("name"),
+                       "= \"" + printable(panel.name, 60) + "\" names an earlier panel too (names are unique)");
+        for (const std::string& row : panel.mask.rows)
+            particles += std::size_t(std::count(row.begin(), row.end(), '1'));
         if (particles > (std::size_t{1} << 24))
-            p.fail(p.at("rows"), "brings the cloth to " + std::to_string(particles) +
-                                     " particles; at most 16,777,216 are allowed");
+            p.fail(p.at("rows"),
+                   "brings the cloth to " + std::to_string(particles) + " particles; at most 16,777,216 are allowed");
         m.panels.push_back(std::move(panel));
     }
     if (const json* seams = cloth.array("seams", 4096)) {
@@ -647,9 +656,9 @@ void read_mask_cloth(ObjectReader& cloth, SceneSpec& s) {
             sr.finish();
             const std::size_t na = mask_edge_cells(seam.a).size(), nb = mask_edge_cells(seam.b).size();
             if (na != nb)
-                sr.fail(sr.at("b") + ".path", "has " + std::to_string(nb) + " cells but " + sr.at("a") + ".path has " +
-                                                  std::to_string(na) +
-                                                  "; a seam joins two edges cell to cell, so they must have equal lengths");
+                sr.fail(sr.at("b") + ".path",
+                        "has " + std::to_string(nb) + " cells but " + sr.at("a") + ".path has " + std::to_string(na) +
+                            "; a seam joins two edges cell to cell, so they must have equal lengths");
             m.seams.push_back(std::move(seam));
         }
     }
@@ -1087,7 +1096,8 @@ std::size_t scene_particle_count(const SceneSpec& s) {
     if (s.cloth == ClothType::mask) { // exact: the '1' cells
         std::size_t n = 0;
         for (const MaskPanelSpec& p : s.masks.panels)
-            for (const std::string& row : p.mask.rows) n += static_cast<std::size_t>(std::count(row.begin(), row.end(), '1'));
+            for (const std::string& row : p.mask.rows)
+                n += static_cast<std::size_t>(std::count(row.begin(), row.end(), '1'));
         return n;
     }
     if (s.cloth == ClothType::mesh) return s.mesh.mesh ? s.mesh.mesh->particle_count() : 0;
@@ -1105,12 +1115,15 @@ std::size_t scene_particle_count(const SceneSpec& s) {
 
 std::optional<std::uint32_t> scene_resolution(const SceneSpec& s) {
     switch (s.cloth) {
-    case ClothType::grid: return s.grid.n;
-    case ClothType::tshirt: return static_cast<std::uint32_t>(std::lround(s.tshirt.cells_per_metre));
+    case ClothType::grid:
+        return s.grid.n;
+    case ClothType::tshirt:
+        return static_cast<std::uint32_t>(std::lround(s.tshirt.cells_per_metre));
     case ClothType::outline:
         return static_cast<std::uint32_t>(std::max(1L, std::lround(1.0 / double(s.outline.spacing))));
     case ClothType::mesh:
-    case ClothType::mask: return std::nullopt;
+    case ClothType::mask:
+        return std::nullopt;
     }
     return std::nullopt;
 }
@@ -1130,7 +1143,8 @@ void set_scene_resolution(SceneSpec& s, std::uint32_t size, const std::string& f
         s.tshirt.cells_per_metre = static_cast<float>(size);
         return;
     case ClothType::outline: {
-        if (size < 10 || size > 1000) throw out_of_range(10, 1000, "cells per metre of the outline: spacing 1 / size m");
+        if (size < 10 || size > 1000)
+            throw out_of_range(10, 1000, "cells per metre of the outline: spacing 1 / size m");
         const float spacing = 1.0f / static_cast<float>(size);
         const double points = outline_panel_point_estimate(s.outline.outline, spacing);
         const std::size_t max_points = OutlinePanelParams{}.max_points;
@@ -1184,7 +1198,8 @@ void build_mask_cloth(const SceneSpec& s, BuiltScene& out) {
     // The cloth's origin: the middle of the panels' origins (positions are stored relative to it).
     std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
     for (const MaskPanelSpec& p : m.panels)
-        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p.origin[k]), hi[k] = std::max(hi[k], p.origin[k]);
+        for (int k = 0; k < 3; ++k)
+            lo[k] = std::min(lo[k], p.origin[k]), hi[k] = std::max(hi[k], p.origin[k]);
     const std::array<double, 3> origin{0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
     const double density = s.model == MaterialModel::fabric ? double(s.fabric.density) : double(m.density);
     GarmentAssembly a;
@@ -1196,7 +1211,8 @@ void build_mask_cloth(const SceneSpec& s, BuiltScene& out) {
         try {
             panels.push_back(add_mask_panel(a, p.mask, p.cell_size, float(density * h * h), mask_frame(p, origin)));
         } catch (const InvalidInput& e) {
-            throw InvalidInput(s.source + ": cloth.panels[" + std::to_string(k) + "] \"" + printable(p.name, 64) + "\": " + e.what());
+            throw InvalidInput(s.source + ": cloth.panels[" + std::to_string(k) + "] \"" + printable(p.name, 64) +
+                               "\": " + e.what());
         }
     }
     const std::vector<double> lumped = lumped_masses(a.x, a.y, a.z, a.triangles, density);
@@ -1206,19 +1222,24 @@ void build_mask_cloth(const SceneSpec& s, BuiltScene& out) {
             a.mass[i] = float(lumped[i] > 0.0 ? lumped[i] : lone);
     }
     std::set<std::pair<std::uint32_t, std::uint32_t>> joined;
-    for (const Edge& e : a.edges) joined.insert({std::min(e.a, e.b), std::max(e.a, e.b)});
+    for (const Edge& e : a.edges)
+        joined.insert({std::min(e.a, e.b), std::max(e.a, e.b)});
     for (std::size_t k = 0; k < m.seams.size(); ++k) {
         const MaskSeamSpec& seam = m.seams[k];
         const auto ca = mask_edge_cells(seam.a), cb = mask_edge_cells(seam.b);
         if (ca.size() != cb.size() || seam.a.panel >= panels.size() || seam.b.panel >= panels.size())
-            throw InvalidInput(s.source + ": cloth.seams[" + std::to_string(k) + "]: edges of unequal length or an unknown panel");
-        const float rest = seam.rest_ratio * 0.5f * (m.panels[seam.a.panel].cell_size + m.panels[seam.b.panel].cell_size);
+            throw InvalidInput(s.source + ": cloth.seams[" + std::to_string(k) +
+                               "]: edges of unequal length or an unknown panel");
+        const float rest =
+            seam.rest_ratio * 0.5f * (m.panels[seam.a.panel].cell_size + m.panels[seam.b.panel].cell_size);
         for (std::size_t j = 0; j < ca.size(); ++j) {
             const std::int32_t pa = panels[seam.a.panel].particle_at(ca[j][0], ca[j][1]);
             const std::int32_t pb = panels[seam.b.panel].particle_at(cb[j][0], cb[j][1]);
             if (pa < 0 || pb < 0)
-                throw InvalidInput(s.source + ": cloth.seams[" + std::to_string(k) + "]: a cell of the seam holds no particle");
-            const auto lo_i = static_cast<std::uint32_t>(std::min(pa, pb)), hi_i = static_cast<std::uint32_t>(std::max(pa, pb));
+                throw InvalidInput(s.source + ": cloth.seams[" + std::to_string(k) +
+                                   "]: a cell of the seam holds no particle");
+            const auto lo_i = static_cast<std::uint32_t>(std::min(pa, pb)),
+                       hi_i = static_cast<std::uint32_t>(std::max(pa, pb));
             if (lo_i == hi_i || !joined.insert({lo_i, hi_i}).second) continue;
             a.edges.push_back({lo_i, hi_i, SpringKind::seam, rest});
         }
@@ -1231,7 +1252,8 @@ void build_mask_cloth(const SceneSpec& s, BuiltScene& out) {
             for (std::uint32_t r = 0; r < panels[k].rows; ++r) {
                 bool any = false;
                 for (std::uint32_t c = 0; c < panels[k].columns; ++c)
-                    if (const std::int32_t i = panels[k].particle_at(r, c); i >= 0) inv_mass[std::size_t(i)] = 0.0f, any = true;
+                    if (const std::int32_t i = panels[k].particle_at(r, c); i >= 0)
+                        inv_mass[std::size_t(i)] = 0.0f, any = true;
                 if (any) break;
             }
         } else if (p.pins == MaskPins::list) {

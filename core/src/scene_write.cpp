@@ -155,17 +155,22 @@ std::string cloth_json(const SceneSpec& s, const std::filesystem::path& relative
         std::string panels;
         for (const MaskPanelSpec& p : m.panels) {
             std::string rows, pins;
-            for (const std::string& r : p.mask.rows) rows += (rows.empty() ? "\n        " : ",\n        ") + str(r);
+            for (const std::string& r : p.mask.rows)
+                rows += (rows.empty() ? "\n        " : ",\n        ") + str(r);
             if (p.pins == MaskPins::list) {
-                for (const auto& c : p.pin_cells) pins += (pins.empty() ? "" : ", ") + cell(c);
+                for (const auto& c : p.pin_cells)
+                    pins += (pins.empty() ? "" : ", ") + cell(c);
                 pins = "[" + pins + "]";
             } else {
                 pins = str(p.pins == MaskPins::top_row ? "top_row" : "none");
             }
             Fields pf;
-            pf.add("name", str(p.name)).add("cell_size", num(p.cell_size))
+            pf.add("name", str(p.name))
+                .add("cell_size", num(p.cell_size))
                 .add("origin", "[" + num(p.origin[0]) + ", " + num(p.origin[1]) + ", " + num(p.origin[2]) + "]")
-                .add("axis_u", vec(p.axis_u)).add("axis_v", vec(p.axis_v)).add("pins", pins)
+                .add("axis_u", vec(p.axis_u))
+                .add("axis_v", vec(p.axis_v))
+                .add("pins", pins)
                 .add("rows", "[" + rows + "]");
             panels += (panels.empty() ? "\n      " : ",\n      ") + pf.object();
         }
@@ -173,7 +178,8 @@ std::string cloth_json(const SceneSpec& s, const std::filesystem::path& relative
         for (const MaskSeamSpec& seam : m.seams) {
             const auto edge = [&](const MaskEdgeSpec& e) {
                 std::string path;
-                for (const auto& c : e.path) path += (path.empty() ? "" : ", ") + cell(c);
+                for (const auto& c : e.path)
+                    path += (path.empty() ? "" : ", ") + cell(c);
                 Fields ef;
                 ef.add("panel", str(m.panels.at(e.panel).name)).add("path", "[" + path + "]");
                 return ef.object();

@@ -53,9 +53,9 @@ struct MeshClothSpec {
 /// placed by its own frame, sewn together along named edges (docs/scene_format.md "Mask cloths").
 enum class MaskPins : std::uint8_t { none, top_row, list };
 struct MaskPanelSpec {
-    std::string name;                     ///< unique within the cloth; seams name panels by it
-    MaskPanel mask;                       ///< rows of '0'/'1', checked on load
-    float cell_size = 0.02f;              ///< h, m: cell (row, column) sits at (u, v) = (column h, row h)
+    std::string name;                            ///< unique within the cloth; seams name panels by it
+    MaskPanel mask;                              ///< rows of '0'/'1', checked on load
+    float cell_size = 0.02f;                     ///< h, m: cell (row, column) sits at (u, v) = (column h, row h)
     std::array<double, 3> origin{0.0, 0.0, 0.0}; ///< where cell (0, 0) goes, m
     /// The in-plane axes as the file gives them (any length, orthogonal); normalised when built.
     std::array<float, 3> axis_u{1.0f, 0.0f, 0.0f};
