@@ -1209,7 +1209,9 @@ void build_mask_cloth(const SceneSpec& s, BuiltScene& out) {
         const MaskPanelSpec& p = m.panels[k];
         const double h = p.cell_size;
         try {
-            panels.push_back(add_mask_panel(a, p.mask, p.cell_size, float(density * h * h), mask_frame(p, origin)));
+            // (The mass is replaced below; clamped into add_mask_panel's range.)
+            panels.push_back(add_mask_panel(a, p.mask, p.cell_size, float(std::clamp(density * h * h, 1e-6, 1.0)),
+                                            mask_frame(p, origin)));
         } catch (const InvalidInput& e) {
             throw InvalidInput(s.source + ": cloth.panels[" + std::to_string(k) + "] \"" + printable(p.name, 64) +
                                "\": " + e.what());
