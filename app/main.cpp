@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
                     "Built-in scene (hang, drape, sphere, flag, tshirt) or a scene file (.json, docs/scene_format.md)")
         ->capture_default_str();
     cmd->add_option("--size", run.size,
-                    "Grid scenes: particles per side N (N x N); tshirt: cells per metre [default: the scene's]")
+                    "Grid scenes: particles per side N (N x N); tshirt and outline cloths: cells per metre (an outline's spacing 1 / N m) [default: the scene's]")
         ->check(in_range<std::uint32_t>(drape::hang_min_n, drape::hang_max_n));
     cmd->add_option("--threads", run.threads, "Worker threads (default: all hardware threads)")
         ->check(in_range<int>(1, 256));
@@ -154,8 +154,8 @@ int main(int argc, char** argv) {
     view_cmd->add_option("--material", view.material,
                          "A fabric preset (see drape materials) or springs, instead of the scene's material");
     view_cmd->add_option("--size", view.size,
-                         "Grid scenes: particles per side N (N x N) [hang: 64, others: the scene's]; tshirt: cells "
-                         "per metre [10, 1000]")
+                         "Grid scenes: particles per side N (N x N) [hang: 64, others: the scene's]; tshirt and "
+                         "outline cloths: cells per metre [10, 1000] (an outline's spacing 1 / N m)")
         ->check(in_range<std::uint32_t>(2, 2048));
     view_cmd->add_option("--threads", view.threads, "Worker threads (default: all hardware threads)")
         ->check(in_range<int>(1, 256));

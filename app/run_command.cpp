@@ -84,28 +84,9 @@ int run_command(const RunOptions& o) {
         throw InvalidInput(std::string("--scene: ") + e.what());
     }
     for (const std::string& w : spec.warnings) std::cerr << "drape run: warning: " << w << "\n";
-    bool size_ignored = false;
-    if (o.size) {
-        if (spec.cloth == ClothType::mesh)
-            throw InvalidInput("--size: the scene's cloth is a mesh; its resolution is that of its OBJ file");
-        if (spec.cloth == ClothType::outline) {
-            // An outline's resolution is its cloth.spacing: --size does not apply (reported, not silently dropped).
-            size_ignored = true;
-            std::fprintf(stderr, "drape run: --size %u is ignored for an outline cloth (cloth.spacing = %g m sets "
-                                 "its resolution)\n",
-                         *o.size, double(spec.outline.spacing));
-        } else if (spec.cloth == ClothType::grid) {
-            if (*o.size < hang_min_n || *o.size > hang_max_n)
-                throw InvalidInput("--size: value " + std::to_string(*o.size) + " is outside the allowed range [" +
-                                   std::to_string(hang_min_n) + ", " + std::to_string(hang_max_n) + "]");
-            spec.grid.n = *o.size;
-        } else {
-            if (*o.size < 10 || *o.size > 1000)
-                throw InvalidInput("--size: value " + std::to_string(*o.size) +
-                                   " is outside the allowed range [10, 1000] (cells per metre of the T-shirt)");
-            spec.tshirt.cells_per_metre = static_cast<float>(*o.size);
-        }
-    }
+    // --size: particles per side of a grid, cells per metre of a T-shirt or an outline (spacing 1 / size); refused
+    // for a mesh or a mask cloth (set_scene_resolution, the viewer's rule too).
+    if (o.size) set_scene_resolution(spec, *o.size, "--size");
     if (o.material) apply_material_flag(spec, *o.material);
     // --stiffness and --damping are the spring model's: refused (not silently dropped) for a fabric.
     for (const auto& [given, flag] : {std::pair{o.stiffness.has_value(), "--stiffness"}, {o.damping.has_value(), "--damping"}})
@@ -127,7 +108,7 @@ int run_command(const RunOptions& o) {
     spec.physics.kernel = o.kernel == "grid" ? KernelPath::grid : o.kernel == "csr" ? KernelPath::csr : KernelPath::automatic;
     spec.physics.fused = !o.staged;
     if (o.dt) spec.dt = static_cast<float>(*o.dt);
-    const std::string size_flag = o.size && !size_ignored ? "--size " + std::to_string(*o.size) : "--scene " + o.scene;
+    const std::string size_flag = o.size ? "--size " + std::to_string(*o.size) : "--scene " + o.scene;
     const std::size_t expected = scene_particle_count(spec);
     if (expected > (std::size_t{1} << 24))
         throw InvalidInput(size_flag + ": the cloth would have " + std::to_string(expected) +
@@ -194,6 +175,7 @@ int run_command(const RunOptions& o) {
     j["cloth"] = spec.cloth == ClothType::grid     ? "grid"
                  : spec.cloth == ClothType::tshirt ? "tshirt"
                  : spec.cloth == ClothType::mesh   ? "mesh"
+                 : spec.cloth == ClothType::mask   ? "mask"
                                                    : "outline";
     if (spec.cloth == ClothType::grid)
         j["n"] = spec.grid.n;
@@ -201,7 +183,8 @@ int run_command(const RunOptions& o) {
         j["cells_per_metre"] = spec.tshirt.cells_per_metre;
     else if (spec.cloth == ClothType::outline)
         j["spacing"] = spec.outline.spacing;
-    if (size_ignored) j["size_ignored"] = *o.size;
+    else if (spec.cloth == ClothType::mask)
+        j["panels"] = spec.masks.panels.size();
     j["particles"] = particles;
     j["springs"] = sim.cloth().spring_count();
     j["threads"] = threads;

@@ -10,7 +10,7 @@ namespace drape::app {
 /// Flags of `drape run`. Unset optionals keep the scene's own value.
 struct RunOptions {
     std::string scene = "hang"; ///< built-in name or path to a .json scene file
-    std::optional<std::uint32_t> size; ///< grid cloths: particles per side; tshirt: cells per metre
+    std::optional<std::uint32_t> size; ///< grid cloths: particles per side; tshirt, outline: cells per metre
     int threads = 0;                   ///< 0 = all hardware threads
     std::optional<std::uint64_t> steps;
     std::optional<double> sim_seconds;

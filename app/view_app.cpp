@@ -697,7 +697,7 @@ void Viewer::print_stats_json() const {
     j["substeps_per_frame"] = session_->substeps();
     j["threads"] = session_->threads();
     j["scene"] = options_.scene;
-    j["n"] = session_->size();
+    if (session_->resizable()) j["n"] = session_->size(); // grid N or cells per metre; a mesh or mask cloth has none
     j["frames"] = samples_.size();
     j["frames_measured"] = frame.size();
     j["dt"] = s.params().dt;

@@ -35,6 +35,25 @@ float spec_total_mass(const SceneSpec& s) {
     return s.cloth == ClothType::grid ? s.grid.total_mass : s.tshirt.total_mass;
 }
 
+/// Outline, mask and mesh cloths: each particle's mass is the areal density x a third of its triangles' area (as
+/// build_scene gives it, CLI and viewer alike), not a total mass spread evenly. The springs model's density field
+/// (kg/m^2); null for a grid or the T-shirt.
+float* areal_density(SceneSpec& s) {
+    switch (s.cloth) {
+    case ClothType::outline:
+        return &s.outline.density;
+    case ClothType::mask:
+        return &s.masks.density;
+    case ClothType::mesh:
+        return &s.mesh.density;
+    default:
+        return nullptr;
+    }
+}
+bool density_masses(const SceneSpec& s) {
+    return areal_density(const_cast<SceneSpec&>(s)) != nullptr;
+}
+
 /// Automatic substeps: 1/60 s per frame, capped at view_auto_budget particle-substeps (at least 10).
 int auto_substeps_for(std::size_t particles, double dt) {
     const int cap = std::clamp(static_cast<int>(view_auto_budget / double(std::max<std::size_t>(particles, 1))), 10,
@@ -44,14 +63,43 @@ int auto_substeps_for(std::size_t particles, double dt) {
 }
 
 /// The spec a snapshot builds: the scene at the snapshot's resolution.
+/// An outline keeps its own spacing until the resolution is changed (its cells per metre are round(1 / spacing));
+/// a mesh or a mask cloth has no resolution control (size 0).
 SceneSpec sized_spec(SceneSpec spec, std::uint32_t size) {
     if (spec.cloth == ClothType::grid)
         spec.grid.n = size;
-    else
+    else if (spec.cloth == ClothType::tshirt)
         spec.tshirt.cells_per_metre = static_cast<float>(size);
+    else if (spec.cloth == ClothType::outline && size != 0 && scene_resolution(spec) != size)
+        spec.outline.spacing = 1.0f / static_cast<float>(size);
     return spec;
 }
 
+/// Typical distance between neighbouring particles, m: the grid's, the T-shirt's or outline's spacing, the smallest
+/// mask cell, a mesh's mean edge length.
+float view_spacing(const SceneSpec& spec, const Cloth& cloth) {
+    switch (spec.cloth) {
+    case ClothType::grid:
+        return spec.grid.size / float(std::max<std::uint32_t>(spec.grid.n, 2) - 1);
+    case ClothType::tshirt:
+        return 1.0f / spec.tshirt.cells_per_metre;
+    case ClothType::outline:
+        return spec.outline.spacing;
+    case ClothType::mask: {
+        float h = INFINITY;
+        for (const MaskPanelSpec& p : spec.masks.panels)
+            h = std::min(h, p.cell_size);
+        return h;
+    }
+    case ClothType::mesh:
+        break;
+    }
+    double sum = 0.0;
+    std::size_t n = 0;
+    for (const Edge& e : cloth.edges)
+        if (e.kind == SpringKind::structural) sum += e.rest, ++n;
+    return n ? static_cast<float>(sum / double(n)) : 0.01f;
+}
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
@@ -164,23 +212,30 @@ ViewSession::Snapshot ViewSession::settings_for(SceneSpec spec, std::optional<st
         t.size = spec.grid.n;
         t.total_mass = spec.grid.total_mass;
     } else {
+        // T-shirt and outline: cells per metre; refused for a mesh or a mask cloth (as `drape run --size`).
         if (size) {
-            if (*size < view_min_cells || *size > view_max_cells)
-                throw InvalidInput("--size: value " + std::to_string(*size) +
-                                   " is outside the allowed range [" + std::to_string(view_min_cells) + ", " +
-                                   std::to_string(view_max_cells) + "] (cells per metre of the T-shirt)");
-            spec.tshirt.cells_per_metre = static_cast<float>(*size);
+            if (spec.cloth != ClothType::mesh && spec.cloth != ClothType::mask &&
+                (*size < view_min_cells || *size > view_max_cells))
+                throw InvalidInput("--size: value " + std::to_string(*size) + " is outside the allowed range [" +
+                                   std::to_string(view_min_cells) + ", " + std::to_string(view_max_cells) +
+                                   "] (cells per metre of the " +
+                                   (spec.cloth == ClothType::outline ? "outline" : "T-shirt") + ")");
+            set_scene_resolution(spec, *size, "--size");
         }
-        t.size = static_cast<std::uint32_t>(spec.tshirt.cells_per_metre);
-        t.total_mass = spec.tshirt.total_mass;
+        t.size = scene_resolution(spec).value_or(0);
+        // Density-mass cloths: the mean node mass is set exactly in build(), from the masses build_scene gives.
+        t.total_mass = density_masses(spec) ? 0.0f : spec.tshirt.total_mass;
     }
     t.fabric.stiffness = {spec.stiffness, spec.stiffness * spec.shear_ratio, spec.stiffness * spec.bend_ratio,
                           spec.seam_stiffness};
     t.fabric.damping_ratio = spec.damping_ratio;
     t.fabric.model = spec.model;
     t.fabric.fabric = spec.fabric;
-    // Node mass: the scene's total over its particles (set exactly in build(), once the count is known).
-    t.fabric.node_mass_g = 1000.0f * t.total_mass / float(std::max<std::size_t>(1, scene_particle_count(spec)));
+    // Node mass: the scene's total over its particles (set exactly in build(), once the count is known; a
+    // density-mass cloth's there, from its masses).
+    t.fabric.node_mass_g = density_masses(spec)
+                               ? view_min_node_mass_g
+                               : 1000.0f * t.total_mass / float(std::max<std::size_t>(1, scene_particle_count(spec)));
     t.params = spec.physics;
     // The scene's dt is the implicit step or the explicit substep, whichever solver it runs; the other one's is
     // automatic.
@@ -238,9 +293,12 @@ double ViewSession::bound_for(const FabricSettings& f, float air_drag, const Aer
     probe.padded_count = c.padded_count;
     probe.inv_mass.reset(c.padded_count);
     const float inv = 1.0f / (f.node_mass_g * 1e-3f);
-    const bool own_masses = f.model == MaterialModel::fabric && c.free_inv_mass.size() == c.particle_count;
+    // A fabric's or a density-mass cloth's own masses (the springs model's scaled to the new mean node mass).
+    const bool own_masses =
+        (f.model == MaterialModel::fabric || density_masses(spec_)) && c.free_inv_mass.size() == c.particle_count;
+    const float scale = f.model == MaterialModel::springs ? fabric_.node_mass_g / f.node_mass_g : 1.0f;
     for (std::size_t i = 0; i < c.particle_count; ++i)
-        probe.inv_mass[i] = own_masses ? c.free_inv_mass[i] : inv;
+        probe.inv_mass[i] = own_masses ? c.free_inv_mass[i] * scale : inv;
     probe.edges = c.edges;
     probe.triangles = c.triangles;
     probe.material = materials(f);
@@ -258,11 +316,12 @@ ViewSession::Built ViewSession::build(Snapshot t, const KeepState* keep_state, b
     const bool fabric = t.fabric.model == MaterialModel::fabric;
     spec.model = t.fabric.model;
     spec.fabric = t.fabric.fabric;
+    const bool own_masses = fabric || density_masses(spec); // per-particle masses from build_scene
     if (!fabric) {
         spec.seam_stiffness = t.fabric.stiffness[static_cast<std::size_t>(SpringKind::seam)];
         if (spec.cloth == ClothType::grid)
             spec.grid.total_mass = t.fabric.node_mass_g * 1e-3f * float(count);
-        else
+        else if (spec.cloth == ClothType::tshirt)
             spec.tshirt.total_mass = std::clamp(t.fabric.node_mass_g * 1e-3f * float(count), 0.001f, 10.0f);
         spec.stiffness = t.fabric.stiffness[0];
         spec.damping_ratio = t.fabric.damping_ratio;
@@ -279,6 +338,15 @@ ViewSession::Built ViewSession::build(Snapshot t, const KeepState* keep_state, b
         t.fabric.stiffness = d.stiffness;
         if (cloth.seams.empty()) t.fabric.stiffness[static_cast<std::size_t>(SpringKind::seam)] = seam;
         t.fabric.derived_damping = d.damping;
+    } else if (own_masses) {
+        // Density x area, as build_scene gave them (the CLI's masses): the node mass shown is their mean, and the
+        // damping uses it (as build_scene's cook does).
+        double total = 0.0;
+        for (std::size_t i = 0; i < cloth.particle_count; ++i)
+            total += 1.0 / double(cloth.free_inv_mass[i]);
+        t.total_mass = static_cast<float>(total);
+        t.fabric.node_mass_g = static_cast<float>(1000.0 * total / double(cloth.particle_count));
+        apply_materials(cloth, materials(t.fabric));
     } else {
         // The exact node mass now that the count is known (the T-shirt's estimate may differ).
         t.fabric.node_mass_g = 1000.0f * spec_total_mass(spec) / float(cloth.particle_count);
@@ -289,11 +357,11 @@ ViewSession::Built ViewSession::build(Snapshot t, const KeepState* keep_state, b
     // authored mass).
     std::vector<std::uint32_t> authored;
     const float inv = 1.0f / (t.fabric.node_mass_g * 1e-3f);
-    const bool own_masses = fabric && cloth.free_inv_mass.size() == cloth.particle_count;
+    const bool free_masses = own_masses && cloth.free_inv_mass.size() == cloth.particle_count;
     for (std::size_t i = 0; i < cloth.particle_count; ++i)
         if (cloth.inv_mass[i] == 0.0f) {
             authored.push_back(static_cast<std::uint32_t>(i));
-            cloth.inv_mass[i] = own_masses ? cloth.free_inv_mass[i] : inv;
+            cloth.inv_mass[i] = free_masses ? cloth.free_inv_mass[i] : inv;
         }
     t.has_seams = false;
     for (const Edge& e : cloth.edges)
@@ -310,8 +378,7 @@ ViewSession::Built ViewSession::build(Snapshot t, const KeepState* keep_state, b
         }
     }
     t.cloth_size = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-3f});
-    t.spacing = spec.cloth == ClothType::grid ? spec.grid.size / float(std::max<std::uint32_t>(t.size, 2) - 1)
-                                              : 1.0f / float(t.size);
+    t.spacing = view_spacing(spec, cloth);
     if (!authored.empty() && hi[1] - lo[1] < 0.1f * t.cloth_size) {
         // A flat cloth held by some of its particles will hang below them: frame the pins' span, a cloth size
         // deep, with a little room for the swing.
@@ -722,6 +789,12 @@ void ViewSession::set_scene(const std::string& name_or_path) {
 }
 
 void ViewSession::set_size(std::uint32_t n) {
+    if (!resizable()) {
+        post(MessageLevel::warning, std::string("refused: a ") + (spec_.cloth == ClothType::mesh
+                                                                      ? "mesh's resolution is its OBJ file's"
+                                                                      : "mask cloth's resolution is its masks' cells"));
+        return;
+    }
     if (grid_scene())
         n = std::clamp(n, view_min_size, view_max_size);
     else
@@ -908,6 +981,16 @@ void ViewSession::set_node_mass(float grams) {
     r.what = "node mass " + fmt(grams) + " g";
     r.target = snapshot();
     r.target.fabric.node_mass_g = grams;
+    if (float* density = areal_density(r.target.spec)) {
+        // Masses are density x area: the node mass scales the areal density (the mean node mass becomes `grams`).
+        const float scaled = *density * (grams / fabric_.node_mass_g);
+        if (!(scaled >= 1e-3f && scaled <= 10.0f)) {
+            post(MessageLevel::warning, "refused: node mass " + fmt(grams) + " g needs an areal density of " +
+                                            fmt(scaled) + " kg/m^2; allowed range [0.001, 10] kg/m^2");
+            return;
+        }
+        *density = scaled;
+    }
     r.target.params = sim_->params();
     r.target.params.dt = static_cast<float>(new_dt);
     if (!auto_substeps_) r.target.substeps = new_substeps;
@@ -1310,6 +1393,8 @@ SceneSpec ViewSession::current_spec() const {
         if (sim_)
             spec.tshirt.total_mass =
                 std::clamp(fabric_.node_mass_g * 1e-3f * float(sim_->cloth().particle_count), 0.001f, 10.0f);
+    } else {
+        spec = sized_spec(spec, size_); // an outline's spacing; a density-mass cloth's density is spec_'s already
     }
     const std::array<float, spring_kind_count>& k = fabric_.stiffness;
     spec.model = fabric_.model;

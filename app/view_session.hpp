@@ -217,10 +217,15 @@ class ViewSession {
     bool grid_scene() const noexcept { return spec_.cloth == ClothType::grid; }
     /// Increases when the scene changes (the camera reframes, the ground moves).
     std::uint64_t scene_generation() const noexcept { return scene_generation_; }
-    /// Rebuilds at a new resolution: particles per side of a grid, cells per metre of the T-shirt. The
-    /// scene's total mass is kept (so the node mass changes); materials are kept.
+    /// Rebuilds at a new resolution: particles per side of a grid, cells per metre of the T-shirt or an outline.
+    /// The scene's total mass is kept (so the node mass changes; an outline keeps its areal density, so its mass
+    /// follows its area); materials are kept.
+    /// Outline: cells per metre too (spacing 1 / n). Refused (a message) for a mesh or a mask cloth.
     void set_size(std::uint32_t n);
+    /// Particles per side (grid) or cells per metre (T-shirt, outline: round(1 / spacing)); 0 for a mesh or mask.
     std::uint32_t size() const noexcept { return size_; }
+    /// Whether the scene has a resolution control (grid, T-shirt, outline; not a mesh or a mask cloth).
+    bool resizable() const noexcept { return scene_resolution(spec_).has_value(); }
     /// Whether the cloth has seam springs (the seam stiffness slider).
     bool has_seams() const noexcept { return has_seams_; }
     /// Axis-aligned box around the cloth at the start and the colliders (planes excluded), m; a cloth pinned

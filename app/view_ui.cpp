@@ -166,13 +166,29 @@ void Viewer::ui_run_mode() {
     help_marker(s.scene().description.c_str());
     ui_scene_file();
     const bool grid = s.grid_scene();
-    ImGui::SliderInt(grid ? "grid size N" : "cells per metre", &ui_size_,
-                     static_cast<int>(grid ? view_min_size : view_min_cells),
-                     static_cast<int>(grid ? view_max_size : view_max_cells), "%d", log_flags);
-    if (ImGui::IsItemDeactivatedAfterEdit()) s.set_size(static_cast<std::uint32_t>(ui_size_));
-    if (!ImGui::IsItemActive() && ui_size_ != static_cast<int>(s.size())) ui_size_ = static_cast<int>(s.size());
-    help_marker("Applied when the slider is released: the cloth is rebuilt in the background, in its starting "
-                "state with the same total mass and materials; the old one runs until the new one is ready.");
+    if (s.resizable()) {
+        ImGui::SliderInt(grid ? "grid size N" : "cells per metre", &ui_size_,
+                         static_cast<int>(grid ? view_min_size : view_min_cells),
+                         static_cast<int>(grid ? view_max_size : view_max_cells), "%d", log_flags);
+        if (ImGui::IsItemDeactivatedAfterEdit()) s.set_size(static_cast<std::uint32_t>(ui_size_));
+        if (!ImGui::IsItemActive() && ui_size_ != static_cast<int>(s.size())) ui_size_ = static_cast<int>(s.size());
+        help_marker(s.scene().cloth == ClothType::outline
+                        ? "The outline's spacing is 1 / (cells per metre). Applied when the slider is released: the "
+                          "cloth is rebuilt in the background, in its starting state with the same areal density "
+                          "and materials; the old one runs until the new one is ready."
+                        : "Applied when the slider is released: the cloth is rebuilt in the background, in its "
+                          "starting state with the same total mass and materials; the old one runs until the new "
+                          "one is ready.");
+        if (!grid) ImGui::TextDisabled("  spacing %.4g mm", 1000.0 * double(s.spacing()));
+    } else {
+        // A mesh's resolution is its OBJ's, a mask cloth's its masks' cells: no slider, the figure instead.
+        ImGui::Text("%s %.4g mm", s.scene().cloth == ClothType::mask ? "mask cell" : "mean edge",
+                    1000.0 * double(s.spacing()));
+        help_marker(s.scene().cloth == ClothType::mask
+                        ? "A mask cloth's resolution is its masks' cells (cloth.panels[k].cell_size, the smallest "
+                          "shown): edit the scene file to change it."
+                        : "A mesh's resolution is that of its OBJ file.");
+    }
     ImGui::Text("%s particles, %s springs", grouped(s.sim().cloth().particle_count).c_str(),
                 grouped(s.sim().cloth().spring_count()).c_str());
     ImGui::Text("simulated %.3f s  (%s %s)", s.sim().time(), grouped(s.sim().steps_done()).c_str(),

@@ -196,15 +196,43 @@ else
     ) || fail=1
 fi
 
-# --size on an outline cloth does not apply: said on stderr and in the JSON, and the reported figures are the spacing's.
+# --size on an outline cloth sets its spacing (1 / cells per metre), as the viewer's slider does; the JSON reports it.
 echo '{"cloth": {"type": "outline", "outline": [[0,0],[0.3,0],[0,0.3]]}}' >"$tmpdir/tri.json"
+"$DRAPE" run --scene "$tmpdir/tri.json" --steps 2 --json >"$out.own" 2>"$err" || { echo "FAIL: outline run"; cat "$err"; fail=1; }
 "$DRAPE" run --scene "$tmpdir/tri.json" --size 50 --steps 2 --json >"$out" 2>"$err" || { echo "FAIL: outline --size run"; cat "$err"; fail=1; }
-if grep -qF -- "--size 50 is ignored for an outline cloth" "$err" &&
-    python3 -c "import json,sys; j=json.load(open('$out')); assert j['cloth']=='outline' and j['size_ignored']==50 and 'n' not in j and 'cells_per_metre' not in j, j"; then
-    echo "ok: --size on an outline -> $(cat "$err")"
+if [ ! -s "$err" ] &&
+    python3 -c "import json,sys; o=json.load(open('$out.own')); j=json.load(open('$out')); assert j['cloth']=='outline' and abs(j['spacing']-0.02)<1e-9 and abs(o['spacing']-0.03)<1e-9 and j['particles']>o['particles'] and 'size_ignored' not in j, (o, j)"; then
+    echo "ok: --size 50 on an outline -> spacing 0.02 m, $(python3 -c "import json; print(json.load(open('$out.own'))['particles'], '->', json.load(open('$out'))['particles'])") particles"
 else
-    echo "FAIL: --size on an outline cloth is not reported as ignored"; cat "$err" "$out"; fail=1
+    echo "FAIL: --size on an outline cloth does not set its spacing"; cat "$err" "$out"; fail=1
 fi
+rm -f "$out.own"
+expect_error "--size: value 5 is outside the allowed range [10, 1000] (cells per metre of the outline" run --scene "$tmpdir/tri.json" --size 5
+
+# Mask cloths (cloth.type "mask"): the example runs; broken files each give their one-line error, exit 2.
+repo=$(cd "$(dirname "$0")/.." && pwd)
+"$DRAPE" run --scene "$repo/scenes/examples/tank_top.json" --steps 20 --json >"$out" 2>"$err" || { echo "FAIL: tank_top run"; cat "$err"; fail=1; }
+python3 -c "import json; j=json.load(open('$out')); assert j['cloth']=='mask' and j['panels']==2 and j['particles']==1450 and j['seam_springs']==62 and j['finite'], j; print('ok: tank_top.json ->', j['particles'], 'particles,', j['seam_springs'], 'seam springs')" || fail=1
+expect_error "--size: the scene's cloth is made of masks" run --scene "$repo/scenes/examples/tank_top.json" --size 50
+mask() { # mask NAME 'panels' 'seams': a mask scene file in $tmpdir
+    echo "{\"cloth\": {\"type\": \"mask\", \"panels\": [$2], \"seams\": [$3]}}" >"$tmpdir/$1.json"
+}
+P_A='{"name": "a", "rows": ["111", "111", "111"]}'
+P_B='{"name": "b", "rows": ["111", "111", "111"], "origin": [0, 0, 0.1]}'
+mask unequal '{"name": "a", "rows": ["111", "11"]}' ''
+expect_error "unequal.json: cloth.panels[0].rows[1] has 2 characters but cloth.panels[0].rows[0] has 3 (a mask is rectangular" run --scene "$tmpdir/unequal.json"
+mask letters '{"name": "a", "rows": ["1x1"]}' ''
+expect_error "letters.json: cloth.panels[0].rows[0] column 1 holds 'x'; only '0' and '1' are allowed" run --scene "$tmpdir/letters.json"
+mask empty "$P_A"', {"name": "b", "rows": ["000", "000"]}' ''
+expect_error "empty.json: cloth.panels[1].rows holds no '1': a panel needs at least one particle" run --scene "$tmpdir/empty.json"
+mask lengths "$P_A, $P_B" '{"a": {"panel": "a", "path": [[0, 0], [0, 2]]}, "b": {"panel": "b", "path": [[0, 0], [0, 1]]}}'
+expect_error "lengths.json: cloth.seams[0].b.path has 2 cells but cloth.seams[0].a.path has 3; a seam joins two edges cell to cell" run --scene "$tmpdir/lengths.json"
+mask inside "$P_A, $P_B" '{"a": {"panel": "a", "path": [[1, 0], [1, 2]]}, "b": {"panel": "b", "path": [[0, 0], [0, 2]]}}'
+expect_error "inside.json: cloth.seams[0].a.path passes cell [1, 1], inside panel \"a\": an edge runs along the panel's boundary" run --scene "$tmpdir/inside.json"
+mask unknown "$P_A" '{"a": {"panel": "a", "path": [[0, 0]]}, "b": {"panel": "c", "path": [[2, 2]]}}'
+expect_error "unknown.json: cloth.seams[0].b.panel = \"c\" is not a panel of this cloth (\"a\")" run --scene "$tmpdir/unknown.json"
+mask cell '{"name": "a", "rows": ["1"], "cell_size": 2}' ''
+expect_error "cell.json: cloth.panels[0].cell_size = 2 is outside the allowed range [0.001, 1] m" run --scene "$tmpdir/cell.json"
 
 # The progress line (a terminal only) is erased before the summary, not left above it.
 if command -v script >/dev/null; then

@@ -63,6 +63,29 @@ void expect_same_spec(const SceneSpec& a, const SceneSpec& b, const std::string&
         EXPECT_EQ(a.outline.sew, b.outline.sew) << what;
         EXPECT_TRUE(same_bits(a.outline.seam_rest_ratio, b.outline.seam_rest_ratio)) << what;
         break;
+    case ClothType::mask:
+        EXPECT_TRUE(same_bits(a.masks.density, b.masks.density)) << what;
+        ASSERT_EQ(a.masks.panels.size(), b.masks.panels.size()) << what;
+        for (std::size_t k = 0; k < a.masks.panels.size(); ++k) {
+            const MaskPanelSpec &p = a.masks.panels[k], &q = b.masks.panels[k];
+            EXPECT_EQ(p.name, q.name) << what;
+            EXPECT_EQ(p.mask.rows, q.mask.rows) << what;
+            EXPECT_TRUE(same_bits(p.cell_size, q.cell_size)) << what;
+            EXPECT_TRUE(same_bits(p.origin, q.origin)) << what;
+            EXPECT_TRUE(same_bits(p.axis_u, q.axis_u)) << what;
+            EXPECT_TRUE(same_bits(p.axis_v, q.axis_v)) << what;
+            EXPECT_EQ(p.pins, q.pins) << what;
+            EXPECT_EQ(p.pin_cells, q.pin_cells) << what;
+        }
+        ASSERT_EQ(a.masks.seams.size(), b.masks.seams.size()) << what;
+        for (std::size_t k = 0; k < a.masks.seams.size(); ++k) {
+            const MaskSeamSpec &p = a.masks.seams[k], &q = b.masks.seams[k];
+            EXPECT_TRUE(p.a.panel == q.a.panel && p.a.path == q.a.path && p.b.panel == q.b.panel &&
+                        p.b.path == q.b.path)
+                << what;
+            EXPECT_TRUE(same_bits(p.rest_ratio, q.rest_ratio)) << what;
+        }
+        break;
     case ClothType::mesh:
         EXPECT_EQ(a.mesh.file, b.mesh.file) << what;
         EXPECT_TRUE(same_bits(a.mesh.density, b.mesh.density)) << what;

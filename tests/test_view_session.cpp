@@ -783,3 +783,86 @@ TEST(ViewSessionImplicit, FlagsScenesAndSavedScenes) {
         EXPECT_NE(std::string(e.what()).find("stability bound"), std::string::npos) << e.what();
     }
 }
+
+// Outline and mask scenes: the viewer builds them as `drape run` does (build_scene: masses from density x area, not
+// a total mass spread evenly), shows their mean node mass, and its resolution control works: an outline's cells per
+// metre set its spacing (1 / n, as `drape run --size`); a mask cloth has none (its cells are the file's).
+TEST(ViewSession, OutlineAndMaskScenesHaveTheCLIsMassesAndResolution) {
+    const std::string path = ::testing::TempDir() + "/drape_view_outline.json";
+    {
+        FILE* f = std::fopen(path.c_str(), "w");
+        ASSERT_NE(f, nullptr);
+        std::fputs(
+            R"({"scene": "tri", "cloth": {"type": "outline", "outline": [[0,0],[0.3,0],[0,0.3]], "spacing": 0.025,
+                       "density": 0.2, "plane": "vertical", "pins": "top_edge"}, "material": {"stiffness": 1000}})",
+            f);
+        std::fclose(f);
+    }
+    const auto same_masses = [](const ViewSession& s, const SceneSpec& spec) {
+        const BuiltScene cli = build_scene(spec);
+        const Cloth& c = s.sim().cloth();
+        EXPECT_EQ(c.particle_count, cli.cloth.particle_count);
+        EXPECT_EQ(c.free_inv_mass, cli.cloth.free_inv_mass);
+        double total = 0.0;
+        for (std::size_t i = 0; i < c.particle_count; ++i) {
+            total += 1.0 / double(cli.cloth.free_inv_mass[i]);
+            EXPECT_EQ(s.sim().is_pinned(i), cli.cloth.inv_mass[i] == 0.0f) << i;
+            if (!s.sim().is_pinned(i)) {
+                EXPECT_EQ(c.inv_mass[i], cli.cloth.inv_mass[i]) << i;
+            }
+        }
+        EXPECT_NEAR(s.fabric().node_mass_g, 1000.0 * total / double(c.particle_count), 1e-6);
+        for (std::size_t k = 0; k < spring_kind_count; ++k)
+            EXPECT_NEAR(c.material[k].damping, cli.cloth.material[k].damping, 1e-5 * cli.cloth.material[k].damping)
+                << k;
+        return total;
+    };
+    ViewSession s(path, std::nullopt, 1, std::nullopt);
+    SceneSpec spec = load_scene(path);
+    const double total = same_masses(s, spec);
+    EXPECT_NEAR(total, 0.2 * 0.5 * 0.3 * 0.3, 1e-6); // density x the triangle's area
+    EXPECT_TRUE(s.resizable());
+    EXPECT_EQ(s.size(), 40u);
+    EXPECT_FLOAT_EQ(s.spacing(), 0.025f);
+    // The slider: 80 cells per metre = a spacing of 1/80 m, the CLI's --size 80; the areal density stays.
+    s.set_size(80);
+    s.wait();
+    set_scene_resolution(spec, 80);
+    EXPECT_NEAR(same_masses(s, spec), total, 1e-6);
+    EXPECT_EQ(s.current_spec().outline.spacing, 1.0f / 80.0f);
+    EXPECT_FLOAT_EQ(s.spacing(), 1.0f / 80.0f);
+    // The node mass slider scales the areal density (a density-mass cloth has no total mass to spread).
+    const float grams = s.fabric().node_mass_g;
+    s.set_node_mass(2.0f * grams);
+    s.wait();
+    EXPECT_NEAR(s.fabric().node_mass_g, 2.0f * grams, 1e-4f * grams);
+    EXPECT_NEAR(s.current_spec().outline.density, 0.4f, 1e-6f);
+    EXPECT_TRUE(stable(s));
+    std::remove(path.c_str());
+
+    // A mask cloth (the fabric example): the CLI's masses; no resolution control, --size refused.
+    const std::string tank = std::string(DRAPE_SOURCE_DIR) + "/scenes/examples/tank_top.json";
+    ViewSession m(tank, std::nullopt, 1, std::nullopt);
+    same_masses(m, load_scene(tank));
+    EXPECT_FALSE(m.resizable());
+    EXPECT_TRUE(m.has_seams());
+    EXPECT_FLOAT_EQ(m.spacing(), 0.02f);
+    const std::size_t n = m.sim().cloth().particle_count;
+    m.set_size(50);
+    EXPECT_FALSE(m.building());
+    EXPECT_NE(m.message().text.find("refused"), std::string::npos) << m.message().text;
+    EXPECT_EQ(m.sim().cloth().particle_count, n);
+    EXPECT_THROW(ViewSession(tank, 50u, 1, std::nullopt), InvalidInput);
+    // Switched to the spring model: masses from the scene's (default) density, still density x area.
+    m.set_material_model(MaterialModel::springs);
+    m.wait();
+    SceneSpec springs = load_scene(tank);
+    springs.model = MaterialModel::springs;
+    same_masses(m, springs);
+    // File > Save scene: the saved mask scene builds the cloth the viewer runs (masses, springs).
+    const BuiltScene saved = build_scene(parse_scene(scene_to_json(m.current_spec()), "saved.json"));
+    EXPECT_EQ(saved.cloth.free_inv_mass, m.sim().cloth().free_inv_mass);
+    EXPECT_EQ(saved.cloth.edges.size(), m.sim().cloth().edges.size());
+    m.advance();
+    EXPECT_TRUE(m.sim().health().finite);
+}

@@ -442,6 +442,228 @@ void read_mesh_cloth(ObjectReader& cloth, const std::string& base_dir, SceneSpec
     if (!note.empty()) s.warnings.push_back(cloth.source() + ": cloth.file \"" + file + "\": " + note);
 }
 
+/// A mask panel's frame: the file's axes normalised, the origin relative to the cloth's origin.
+PanelFrame mask_frame(const MaskPanelSpec& p, const std::array<double, 3>& cloth_origin) {
+    PanelFrame f;
+    const auto unit = [](const std::array<float, 3>& a) {
+        const double len = std::sqrt(double(a[0]) * a[0] + double(a[1]) * a[1] + double(a[2]) * a[2]);
+        return std::array<float, 3>{float(a[0] / len), float(a[1] / len), float(a[2] / len)};
+    };
+    f.axis_u = unit(p.axis_u);
+    f.axis_v = unit(p.axis_v);
+    for (int k = 0; k < 3; ++k)
+        f.origin[k] = static_cast<float>(p.origin[k] - cloth_origin[k]);
+    return f;
+}
+
+/// Whether every mask panel's u axis is that of the first (or its opposite): the fabric's weave then has one
+/// direction in the cloth (WeaveAlignment::aligned along it).
+bool mask_weave_aligned(const MaskClothSpec& m) {
+    if (m.panels.empty()) return true;
+    const PanelFrame f0 = mask_frame(m.panels[0], {0.0, 0.0, 0.0});
+    for (const MaskPanelSpec& p : m.panels) {
+        const PanelFrame f = mask_frame(p, {0.0, 0.0, 0.0});
+        const double d = double(f.axis_u[0]) * f0.axis_u[0] + double(f.axis_u[1]) * f0.axis_u[1] +
+                         double(f.axis_u[2]) * f0.axis_u[2];
+        if (std::fabs(d) < 0.9999) return false;
+    }
+    return true;
+}
+
+/// "[row, column]" of a mask cell, for messages.
+std::string cell_text(std::int64_t row, std::int64_t column) {
+    std::string out(1, '['); // (built up: GCC 12 warns falsely on "[" + std::to_string(...), -Wrestrict)
+    out += std::to_string(row);
+    out += ", ";
+    out += std::to_string(column);
+    out += ']';
+    return out;
+}
+
+/// A [row, column] pair from the file: whole numbers below the mask's size.
+std::array<std::uint32_t, 2> read_cell(const ObjectReader& r, const json& v, const std::string& where,
+                                       const MaskPanel& mask) {
+    const std::size_t rows = mask.rows.size(), columns = mask.rows[0].size();
+    const std::string range =
+        "rows [0, " + std::to_string(rows - 1) + "], columns [0, " + std::to_string(columns - 1) + "]";
+    for (const std::string& w : {where, where + "[0]", where + "[1]"})
+        r.check_finite(w, range);
+    if (!v.is_array() || v.size() != 2 || !v[0].is_number_unsigned() || !v[1].is_number_unsigned())
+        r.fail(where, "must be a cell [row, column] (whole numbers; " + range + ")");
+    const std::uint64_t row = v[0].get<std::uint64_t>(), column = v[1].get<std::uint64_t>();
+    if (row >= rows || column >= columns)
+        r.fail(where,
+               "= [" + std::to_string(row) + ", " + std::to_string(column) + "] is outside the mask (" + range + ")");
+    return {static_cast<std::uint32_t>(row), static_cast<std::uint32_t>(column)};
+}
+
+/// An in-plane axis of a mask panel: 3 numbers, length 1e-6..1e6 (normalised when built).
+std::array<float, 3> read_axis(ObjectReader& p, const std::string& key, std::array<float, 3> fallback) {
+    const std::array<float, 3> a = p.vec3(key, 1e6, "", fallback);
+    const double len = std::sqrt(double(a[0]) * a[0] + double(a[1]) * a[1] + double(a[2]) * a[2]);
+    if (!(len >= 1e-6))
+        p.fail(p.at(key), "has length " + format_number(len) + "; an axis needs a length of at least 1e-6");
+    return a;
+}
+
+/// One panel of a mask cloth (cloth.panels[k]).
+MaskPanelSpec read_mask_panel(ObjectReader& p) {
+    MaskPanelSpec out;
+    out.name = p.text("name", {}, "");
+    if (out.name.empty()) p.fail(p.at("name"), "is required: a name that seams use to refer to the panel");
+    if (out.name.size() > 64) p.fail(p.at("name"), "is longer than 64 characters");
+    const json* rows = p.array("rows", mask_max_side);
+    if (!rows || rows->empty())
+        p.fail(p.at("rows"), "must list 1 to " + std::to_string(mask_max_side) +
+                                 " rows of '0' and '1' characters ('1' = a particle)");
+    std::size_t ones = 0;
+    for (std::size_t r = 0; r < rows->size(); ++r) {
+        const std::string where = p.at("rows") + "[" + std::to_string(r) + "]";
+        const json& v = (*rows)[r];
+        p.check_finite(where, "");
+        if (!v.is_string()) p.fail(where, "must be a string of '0' and '1' characters");
+        const std::string& row = v.get_ref<const std::string&>();
+        if (row.empty() || row.size() > mask_max_side)
+            p.fail(where,
+                   "has " + std::to_string(row.size()) + " characters; allowed 1 to " + std::to_string(mask_max_side));
+        if (r > 0 && row.size() != out.mask.rows[0].size())
+            p.fail(where, "has " + std::to_string(row.size()) + " characters but " + p.at("rows") + "[0] has " +
+                              std::to_string(out.mask.rows[0].size()) +
+                              " (a mask is rectangular: rows of equal length)");
+        for (std::size_t c = 0; c < row.size(); ++c) {
+            if (row[c] == '1') {
+                ++ones;
+            } else if (row[c] != '0') {
+                const auto uc = static_cast<unsigned char>(row[c]);
+                char what[32];
+                if (uc >= 32 && uc < 127)
+                    std::snprintf(what, sizeof what, "'%c'", row[c]);
+                else
+                    std::snprintf(what, sizeof what, "byte 0x%02x", unsigned(uc));
+                p.fail(where, "column " + std::to_string(c) + " holds " + what + "; only '0' and '1' are allowed");
+            }
+        }
+        out.mask.rows.push_back(row);
+    }
+    if (ones == 0) p.fail(p.at("rows"), "holds no '1': a panel needs at least one particle");
+    out.cell_size = static_cast<float>(p.number("cell_size", 1e-3, 1.0, " m", out.cell_size));
+    out.origin = p.vec3_double("origin", 1000.0, " m", out.origin);
+    out.axis_u = read_axis(p, "axis_u", out.axis_u);
+    out.axis_v = read_axis(p, "axis_v", out.axis_v);
+    const auto& u = out.axis_u;
+    const auto& v = out.axis_v;
+    const double cosine = (double(u[0]) * v[0] + double(u[1]) * v[1] + double(u[2]) * v[2]) /
+                          (std::sqrt(double(u[0]) * u[0] + double(u[1]) * u[1] + double(u[2]) * u[2]) *
+                           std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]));
+    if (!(std::fabs(cosine) <= 1e-5))
+        p.fail(p.at("axis_v"), "is not perpendicular to " + p.at("axis_u") + " (cosine of the angle " +
+                                   format_number(cosine) + "; allowed within 1e-5 of 0)");
+    if (p.has_array("pins")) {
+        const json* list = p.array("pins", ones);
+        out.pins = MaskPins::list;
+        for (std::size_t k = 0; k < list->size(); ++k) {
+            const std::string where = p.at("pins") + "[" + std::to_string(k) + "]";
+            const auto cell = read_cell(p, (*list)[k], where, out.mask);
+            if (out.mask.rows[cell[0]][cell[1]] != '1')
+                p.fail(where, "= " + cell_text(cell[0], cell[1]) + " is a '0' cell (no particle to pin)");
+            out.pin_cells.push_back(cell);
+        }
+    } else {
+        out.pins = p.text("pins", {"none", "top_row"}, "none") == "top_row" ? MaskPins::top_row : MaskPins::none;
+    }
+    p.finish();
+    return out;
+}
+
+/// One side of a seam (cloth.seams[k].a or .b): the panel by name and the path along its boundary.
+MaskEdgeSpec read_mask_edge(ObjectReader& e, const std::vector<MaskPanelSpec>& panels) {
+    MaskEdgeSpec out;
+    std::string names; // the first 8, for messages
+    for (std::size_t k = 0; k < panels.size() && k < 8; ++k)
+        names += (k ? ", \"" : "\"") + printable(panels[k].name, 64) + "\"";
+    if (panels.size() > 8) names += ", ... (" + std::to_string(panels.size()) + " panels)";
+    const std::string name = e.text("panel", {}, "");
+    if (name.empty()) e.fail(e.at("panel"), "is required: the name of a panel (" + names + ")");
+    const auto it = std::find_if(panels.begin(), panels.end(), [&](const MaskPanelSpec& p) { return p.name == name; });
+    if (it == panels.end())
+        e.fail(e.at("panel"), "= \"" + printable(name, 60) + "\" is not a panel of this cloth (" + names + ")");
+    out.panel = static_cast<std::uint32_t>(it - panels.begin());
+    const MaskPanel& mask = it->mask;
+    const std::string shown = printable(name, 64); // the name as messages show it (no control characters)
+    const json* path = e.array("path", 4096);
+    if (!path || path->empty())
+        e.fail(e.at("path"),
+               "must list 1 to 4096 cells [row, column]: the edge's first cell, its corners, its last cell");
+    for (std::size_t k = 0; k < path->size(); ++k) {
+        const std::string where = e.at("path") + "[" + std::to_string(k) + "]";
+        out.path.push_back(read_cell(e, (*path)[k], where, mask));
+        if (k == 0) continue;
+        const std::int64_t dr = std::int64_t(out.path[k][0]) - out.path[k - 1][0];
+        const std::int64_t dc = std::int64_t(out.path[k][1]) - out.path[k - 1][1];
+        if (dr == 0 && dc == 0) e.fail(where, "repeats the cell before it");
+        if (dr != 0 && dc != 0 && std::llabs(dr) != std::llabs(dc))
+            e.fail(where, "is not on the same row, column or 45-degree diagonal as " + e.at("path") + "[" +
+                              std::to_string(k - 1) + "] (each leg of an edge is straight)");
+    }
+    std::set<std::pair<std::uint32_t, std::uint32_t>> seen;
+    for (const auto& [r, c] : mask_edge_cells(out)) {
+        if (mask.rows[r][c] != '1')
+            e.fail(e.at("path"), "passes cell " + cell_text(r, c) + " of panel \"" + shown +
+                                     "\", a '0' (an edge runs along particles)");
+        if (!mask_cell_on_boundary(mask, r, c))
+            e.fail(e.at("path"), "passes cell " + cell_text(r, c) + ", inside panel \"" + shown +
+                                     "\": an edge runs along the panel's boundary");
+        if (!seen.insert({r, c}).second) e.fail(e.at("path"), "passes cell " + cell_text(r, c) + " twice");
+    }
+    e.finish();
+    return out;
+}
+
+/// cloth.type = "mask": panels, seams, density.
+void read_mask_cloth(ObjectReader& cloth, SceneSpec& s) {
+    MaskClothSpec& m = s.masks;
+    m.density = static_cast<float>(cloth.number("density", 1e-3, 10.0, " kg/m^2", m.density));
+    const json* panels = cloth.array("panels", 256);
+    if (!panels || panels->empty()) cloth.fail(cloth.at("panels"), "must list 1 to 256 panels");
+    std::size_t particles = 0;
+    for (std::size_t k = 0; k < panels->size(); ++k) {
+        ObjectReader p((*panels)[k], cloth.at("panels") + "[" + std::to_string(k) + "]", cloth.source(),
+                       cloth.non_finite());
+        MaskPanelSpec panel = read_mask_panel(p);
+        for (const MaskPanelSpec& other : m.panels)
+            if (other.name == panel.name)
+                p.fail(p.at("name"),
+                       "= \"" + printable(panel.name, 60) + "\" names an earlier panel too (names are unique)");
+        for (const std::string& row : panel.mask.rows)
+            particles += std::size_t(std::count(row.begin(), row.end(), '1'));
+        if (particles > (std::size_t{1} << 24))
+            p.fail(p.at("rows"),
+                   "brings the cloth to " + std::to_string(particles) + " particles; at most 16,777,216 are allowed");
+        m.panels.push_back(std::move(panel));
+    }
+    if (const json* seams = cloth.array("seams", 4096)) {
+        for (std::size_t k = 0; k < seams->size(); ++k) {
+            const std::string where = cloth.at("seams") + "[" + std::to_string(k) + "]";
+            ObjectReader sr((*seams)[k], where, cloth.source(), cloth.non_finite());
+            MaskSeamSpec seam;
+            ObjectReader a = sr.object("a");
+            if (!sr.has("a")) sr.fail(sr.at("a"), "is required: {\"panel\": name, \"path\": [[row, column], ...]}");
+            seam.a = read_mask_edge(a, m.panels);
+            ObjectReader b = sr.object("b");
+            if (!sr.has("b")) sr.fail(sr.at("b"), "is required: {\"panel\": name, \"path\": [[row, column], ...]}");
+            seam.b = read_mask_edge(b, m.panels);
+            seam.rest_ratio = static_cast<float>(sr.number("rest_ratio", 0.01, 2.0, "", seam.rest_ratio));
+            sr.finish();
+            const std::size_t na = mask_edge_cells(seam.a).size(), nb = mask_edge_cells(seam.b).size();
+            if (na != nb)
+                sr.fail(sr.at("b") + ".path",
+                        "has " + std::to_string(nb) + " cells but " + sr.at("a") + ".path has " + std::to_string(na) +
+                            "; a seam joins two edges cell to cell, so they must have equal lengths");
+            m.seams.push_back(std::move(seam));
+        }
+    }
+}
+
 /// The "material" object: the seeds' spring fields ("model": "springs", the default when none is given) or a fabric
 /// ("model": "fabric"): a preset in "fabric" with any fields overriding it, or every figure of a custom fabric, in
 /// file units (g/m^2, N/m, micro-N*m, s). A material with fields of both models is refused naming one of each.
@@ -560,6 +782,40 @@ SceneState read_state(ObjectReader& st) {
 }
 } // namespace
 
+std::vector<std::array<std::uint32_t, 2>> mask_edge_cells(const MaskEdgeSpec& edge) {
+    std::vector<std::array<std::uint32_t, 2>> out;
+    if (edge.path.empty()) return out;
+    out.push_back(edge.path[0]);
+    for (std::size_t k = 1; k < edge.path.size(); ++k) {
+        std::int64_t r = edge.path[k - 1][0], c = edge.path[k - 1][1];
+        const std::int64_t tr = edge.path[k][0], tc = edge.path[k][1];
+        const std::int64_t sr = (tr > r) - (tr < r), sc = (tc > c) - (tc < c);
+        while (r != tr || c != tc) {
+            r += sr;
+            c += sc;
+            out.push_back({static_cast<std::uint32_t>(r), static_cast<std::uint32_t>(c)});
+        }
+    }
+    return out;
+}
+
+bool mask_cell_on_boundary(const MaskPanel& mask, std::int64_t row, std::int64_t column) {
+    const auto present = [&](std::int64_t r, std::int64_t c) {
+        return r >= 0 && c >= 0 && r < std::int64_t(mask.rows.size()) && c < std::int64_t(mask.rows[0].size()) &&
+               mask.rows[std::size_t(r)][std::size_t(c)] == '1';
+    };
+    if (!present(row, column)) return false;
+    // add_mask_panel's triangles: a cell with four particles is covered by two triangles, one with three by the
+    // triangle of those three. The quarter of a cell at (row, column) is covered when the cell has all four corners,
+    // or three with the missing one opposite (row, column): exactly when both corners beside it are present. The
+    // particle is inside the mesh when all four quarters around it are covered; otherwise a triangle edge through it
+    // belongs to one triangle, or it is in none.
+    for (const std::int64_t dr : {-1, 1})
+        for (const std::int64_t dc : {-1, 1})
+            if (!present(row + dr, column) || !present(row, column + dc)) return true;
+    return false;
+}
+
 std::vector<std::string> builtin_scene_names() {
     std::vector<std::string> out;
     for (std::size_t k = 0; k < builtin_scene_json_count; ++k) out.emplace_back(builtin_scene_json_names[k]);
@@ -580,13 +836,16 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
 
     // cloth
     ObjectReader cloth = root.object("cloth");
-    const std::string type = cloth.text("type", {"grid", "tshirt", "outline", "mesh"}, "grid");
+    const std::string type = cloth.text("type", {"grid", "tshirt", "outline", "mesh", "mask"}, "grid");
     s.cloth = type == "tshirt"    ? ClothType::tshirt
               : type == "outline" ? ClothType::outline
               : type == "mesh"    ? ClothType::mesh
+              : type == "mask"    ? ClothType::mask
                                   : ClothType::grid;
     if (s.cloth == ClothType::mesh) {
         read_mesh_cloth(cloth, base_dir, s);
+    } else if (s.cloth == ClothType::mask) {
+        read_mask_cloth(cloth, s);
     } else if (s.cloth == ClothType::outline) {
         OutlineClothSpec& o = s.outline;
         const json* pts = cloth.array("outline", 4096);
@@ -674,6 +933,10 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
         read_material(mat, s);
         mat.finish();
     }
+    if (s.model == MaterialModel::fabric && s.cloth == ClothType::mask && !mask_weave_aligned(s.masks))
+        s.warnings.push_back(source + ": cloth.panels: the panels' axis_u differ, so the fabric's weave has no single "
+                                      "direction in the cloth; the membrane uses the direction-free rule (unaligned, "
+                                      "docs/fabric.md) along the first panel's axis_u");
     // With a fabric the mass comes from its areal density: a cloth's own mass or density would be a second answer.
     if (s.model == MaterialModel::fabric) {
         const char* key = s.cloth == ClothType::grid || s.cloth == ClothType::tshirt ? "mass" : "density";
@@ -830,6 +1093,13 @@ SceneSpec load_scene(const std::string& name_or_path) {
 
 std::size_t scene_particle_count(const SceneSpec& s) {
     if (s.cloth == ClothType::grid) return std::size_t{s.grid.n} * s.grid.n;
+    if (s.cloth == ClothType::mask) { // exact: the '1' cells
+        std::size_t n = 0;
+        for (const MaskPanelSpec& p : s.masks.panels)
+            for (const std::string& row : p.mask.rows)
+                n += static_cast<std::size_t>(std::count(row.begin(), row.end(), '1'));
+        return n;
+    }
     if (s.cloth == ClothType::mesh) return s.mesh.mesh ? s.mesh.mesh->particle_count() : 0;
     if (s.cloth == ClothType::outline) { // bounding box / spacing^2, per panel (an upper bound)
         double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
@@ -841,6 +1111,56 @@ std::size_t scene_particle_count(const SceneSpec& s) {
     }
     const double r = s.tshirt.cells_per_metre;
     return static_cast<std::size_t>(0.8 * r * r) + 64; // the mask's area is ~0.39 m^2 per panel (panels.hpp)
+}
+
+std::optional<std::uint32_t> scene_resolution(const SceneSpec& s) {
+    switch (s.cloth) {
+    case ClothType::grid:
+        return s.grid.n;
+    case ClothType::tshirt:
+        return static_cast<std::uint32_t>(std::lround(s.tshirt.cells_per_metre));
+    case ClothType::outline:
+        return static_cast<std::uint32_t>(std::max(1L, std::lround(1.0 / double(s.outline.spacing))));
+    case ClothType::mesh:
+    case ClothType::mask:
+        return std::nullopt;
+    }
+    return std::nullopt;
+}
+
+void set_scene_resolution(SceneSpec& s, std::uint32_t size, const std::string& flag) {
+    const auto out_of_range = [&](std::uint32_t lo, std::uint32_t hi, const std::string& what) {
+        return InvalidInput(flag + ": value " + std::to_string(size) + " is outside the allowed range [" +
+                            std::to_string(lo) + ", " + std::to_string(hi) + "] (" + what + ")");
+    };
+    switch (s.cloth) {
+    case ClothType::grid:
+        if (size < hang_min_n || size > hang_max_n) throw out_of_range(hang_min_n, hang_max_n, "particles per side");
+        s.grid.n = size;
+        return;
+    case ClothType::tshirt:
+        if (size < 10 || size > 1000) throw out_of_range(10, 1000, "cells per metre of the T-shirt");
+        s.tshirt.cells_per_metre = static_cast<float>(size);
+        return;
+    case ClothType::outline: {
+        if (size < 10 || size > 1000)
+            throw out_of_range(10, 1000, "cells per metre of the outline: spacing 1 / size m");
+        const float spacing = 1.0f / static_cast<float>(size);
+        const double points = outline_panel_point_estimate(s.outline.outline, spacing);
+        const std::size_t max_points = OutlinePanelParams{}.max_points;
+        if (points > double(max_points))
+            throw InvalidInput(flag + " " + std::to_string(size) + ": a spacing of " + format_number(spacing) +
+                               " m gives this outline up to " + format_number(std::floor(points)) +
+                               " points per panel; at most " + std::to_string(max_points) + " are allowed");
+        s.outline.spacing = spacing;
+        return;
+    }
+    case ClothType::mesh:
+        throw InvalidInput(flag + ": the scene's cloth is a mesh; its resolution is that of its OBJ file");
+    case ClothType::mask:
+        throw InvalidInput(flag + ": the scene's cloth is made of masks; its resolution is their cells "
+                                  "(cloth.panels[k].rows and cell_size)");
+    }
 }
 
 namespace {
@@ -867,6 +1187,87 @@ void cook_assembly(const SceneSpec& s, const GarmentAssembly& a, const std::vect
     }
     out.cloth.free_inv_mass = free_inv_mass;
     out.initial = a.initial_state();
+}
+
+/// cloth.type = "mask": the panels (add_mask_panel), masses from the areal density (a third of each triangle's area
+/// to its corners; a particle in no triangle gets a third of a half cell, as the T-shirt's), the seams (cell k of
+/// edge a to cell k of edge b; a pair already joined or a particle with itself is skipped), the pins.
+void build_mask_cloth(const SceneSpec& s, BuiltScene& out) {
+    const MaskClothSpec& m = s.masks;
+    if (m.panels.empty()) throw InvalidInput(s.source + ": cloth.panels: a mask cloth needs at least one panel");
+    // The cloth's origin: the middle of the panels' origins (positions are stored relative to it).
+    std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+    for (const MaskPanelSpec& p : m.panels)
+        for (int k = 0; k < 3; ++k)
+            lo[k] = std::min(lo[k], p.origin[k]), hi[k] = std::max(hi[k], p.origin[k]);
+    const std::array<double, 3> origin{0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
+    const double density = s.model == MaterialModel::fabric ? double(s.fabric.density) : double(m.density);
+    GarmentAssembly a;
+    std::vector<MaskPanelBuild> panels;
+    panels.reserve(m.panels.size());
+    for (std::size_t k = 0; k < m.panels.size(); ++k) {
+        const MaskPanelSpec& p = m.panels[k];
+        const double h = p.cell_size;
+        try {
+            // (The mass is replaced below; clamped into add_mask_panel's range.)
+            panels.push_back(add_mask_panel(a, p.mask, p.cell_size, float(std::clamp(density * h * h, 1e-6, 1.0)),
+                                            mask_frame(p, origin)));
+        } catch (const InvalidInput& e) {
+            throw InvalidInput(s.source + ": cloth.panels[" + std::to_string(k) + "] \"" + printable(p.name, 64) +
+                               "\": " + e.what());
+        }
+    }
+    const std::vector<double> lumped = lumped_masses(a.x, a.y, a.z, a.triangles, density);
+    for (std::size_t k = 0; k < panels.size(); ++k) {
+        const double h = m.panels[k].cell_size, lone = density * h * h / 6.0;
+        for (std::uint32_t i = panels[k].first_particle; i < panels[k].first_particle + panels[k].particle_count; ++i)
+            a.mass[i] = float(lumped[i] > 0.0 ? lumped[i] : lone);
+    }
+    std::set<std::pair<std::uint32_t, std::uint32_t>> joined;
+    for (const Edge& e : a.edges)
+        joined.insert({std::min(e.a, e.b), std::max(e.a, e.b)});
+    for (std::size_t k = 0; k < m.seams.size(); ++k) {
+        const MaskSeamSpec& seam = m.seams[k];
+        const auto ca = mask_edge_cells(seam.a), cb = mask_edge_cells(seam.b);
+        if (ca.size() != cb.size() || seam.a.panel >= panels.size() || seam.b.panel >= panels.size())
+            throw InvalidInput(s.source + ": cloth.seams[" + std::to_string(k) +
+                               "]: edges of unequal length or an unknown panel");
+        const float rest =
+            seam.rest_ratio * 0.5f * (m.panels[seam.a.panel].cell_size + m.panels[seam.b.panel].cell_size);
+        for (std::size_t j = 0; j < ca.size(); ++j) {
+            const std::int32_t pa = panels[seam.a.panel].particle_at(ca[j][0], ca[j][1]);
+            const std::int32_t pb = panels[seam.b.panel].particle_at(cb[j][0], cb[j][1]);
+            if (pa < 0 || pb < 0)
+                throw InvalidInput(s.source + ": cloth.seams[" + std::to_string(k) +
+                                   "]: a cell of the seam holds no particle");
+            const auto lo_i = static_cast<std::uint32_t>(std::min(pa, pb)),
+                       hi_i = static_cast<std::uint32_t>(std::max(pa, pb));
+            if (lo_i == hi_i || !joined.insert({lo_i, hi_i}).second) continue;
+            a.edges.push_back({lo_i, hi_i, SpringKind::seam, rest});
+        }
+    }
+    std::vector<float> inv_mass = a.inverse_masses();
+    const std::vector<float> free_inv_mass = inv_mass;
+    for (std::size_t k = 0; k < panels.size(); ++k) {
+        const MaskPanelSpec& p = m.panels[k];
+        if (p.pins == MaskPins::top_row) { // the first row holding a particle
+            for (std::uint32_t r = 0; r < panels[k].rows; ++r) {
+                bool any = false;
+                for (std::uint32_t c = 0; c < panels[k].columns; ++c)
+                    if (const std::int32_t i = panels[k].particle_at(r, c); i >= 0)
+                        inv_mass[std::size_t(i)] = 0.0f, any = true;
+                if (any) break;
+            }
+        } else if (p.pins == MaskPins::list) {
+            for (const auto& [r, c] : p.pin_cells)
+                if (const std::int32_t i = panels[k].particle_at(r, c); i >= 0) inv_mass[std::size_t(i)] = 0.0f;
+        }
+    }
+    // The fabric's u: the first panel's (mask columns); unaligned when the panels' u axes differ (a warning on load).
+    const bool aligned = mask_weave_aligned(m);
+    cook_assembly(s, a, inv_mass, free_inv_mass, out, mask_frame(m.panels[0], origin).axis_u,
+                  aligned ? WeaveAlignment::aligned : WeaveAlignment::unaligned);
+    out.cloth.origin = origin;
 }
 
 /// A saved state replaces the initial state and the pins (after dt is chosen, so the default dt is that of the
@@ -969,6 +1370,8 @@ BuiltScene build_scene(const SceneSpec& s) {
         }
         cook_assembly(s, a, inv_mass, free_inv_mass, out);
         out.cloth.origin = {double(o.centre[0]), double(o.centre[1]), double(o.centre[2])};
+    } else if (s.cloth == ClothType::mask) {
+        build_mask_cloth(s, out);
     } else if (s.cloth == ClothType::mesh) {
         const MeshClothSpec& m = s.mesh;
         if (!m.mesh) throw InvalidInput("mesh cloth: no mesh loaded (cloth.file)");

@@ -142,6 +142,57 @@ std::string cloth_json(const SceneSpec& s, const std::filesystem::path& relative
         }
         break;
     }
+    case ClothType::mask: {
+        const MaskClothSpec& m = s.masks;
+        const auto cell = [](const std::array<std::uint32_t, 2>& c) {
+            std::string out(1, '['); // (built up: GCC 12 warns falsely on "[" + std::string, -Wrestrict)
+            out += num(c[0]);
+            out += ", ";
+            out += num(c[1]);
+            out += ']';
+            return out;
+        };
+        std::string panels;
+        for (const MaskPanelSpec& p : m.panels) {
+            std::string rows, pins;
+            for (const std::string& r : p.mask.rows)
+                rows += (rows.empty() ? "\n        " : ",\n        ") + str(r);
+            if (p.pins == MaskPins::list) {
+                for (const auto& c : p.pin_cells)
+                    pins += (pins.empty() ? "" : ", ") + cell(c);
+                pins = "[" + pins + "]";
+            } else {
+                pins = str(p.pins == MaskPins::top_row ? "top_row" : "none");
+            }
+            Fields pf;
+            pf.add("name", str(p.name))
+                .add("cell_size", num(p.cell_size))
+                .add("origin", "[" + num(p.origin[0]) + ", " + num(p.origin[1]) + ", " + num(p.origin[2]) + "]")
+                .add("axis_u", vec(p.axis_u))
+                .add("axis_v", vec(p.axis_v))
+                .add("pins", pins)
+                .add("rows", "[" + rows + "]");
+            panels += (panels.empty() ? "\n      " : ",\n      ") + pf.object();
+        }
+        std::string seams;
+        for (const MaskSeamSpec& seam : m.seams) {
+            const auto edge = [&](const MaskEdgeSpec& e) {
+                std::string path;
+                for (const auto& c : e.path)
+                    path += (path.empty() ? "" : ", ") + cell(c);
+                Fields ef;
+                ef.add("panel", str(m.panels.at(e.panel).name)).add("path", "[" + path + "]");
+                return ef.object();
+            };
+            Fields sf;
+            sf.add("a", edge(seam.a)).add("b", edge(seam.b)).add("rest_ratio", num(seam.rest_ratio));
+            seams += (seams.empty() ? "\n      " : ",\n      ") + sf.object();
+        }
+        f.add("type", str("mask"));
+        if (s.model == MaterialModel::springs) f.add("density", num(m.density));
+        f.add("panels", "[" + panels + "\n    ]").add("seams", "[" + seams + (seams.empty() ? "]" : "\n    ]"));
+        break;
+    }
     case ClothType::mesh: {
         const MeshClothSpec& m = s.mesh;
         std::filesystem::path file = std::filesystem::absolute(m.file).lexically_normal();

@@ -18,7 +18,7 @@
 
 namespace drape {
 
-enum class ClothType : std::uint8_t { grid, tshirt, outline, mesh };
+enum class ClothType : std::uint8_t { grid, tshirt, outline, mesh, mask };
 
 /// cloth.type = "outline": a panel cut from an outline polygon (seed 004: filled, Delaunay-triangulated), optionally
 /// with an identical second panel `gap` behind it, sewn to it along outline stretches (a bag, a pillow).
@@ -49,6 +49,45 @@ struct MeshClothSpec {
     std::shared_ptr<const TriangleMesh> mesh; ///< what the file holds (cleaned), shared between copies of the spec
 };
 
+/// cloth.type = "mask": one or more named panels drawn as 0/1 masks (seed 000 section 1.4, the T-shirt's way), each
+/// placed by its own frame, sewn together along named edges (docs/scene_format.md "Mask cloths").
+enum class MaskPins : std::uint8_t { none, top_row, list };
+struct MaskPanelSpec {
+    std::string name;                            ///< unique within the cloth; seams name panels by it
+    MaskPanel mask;                              ///< rows of '0'/'1', checked on load
+    float cell_size = 0.02f;                     ///< h, m: cell (row, column) sits at (u, v) = (column h, row h)
+    std::array<double, 3> origin{0.0, 0.0, 0.0}; ///< where cell (0, 0) goes, m
+    /// The in-plane axes as the file gives them (any length, orthogonal); normalised when built.
+    std::array<float, 3> axis_u{1.0f, 0.0f, 0.0f};
+    std::array<float, 3> axis_v{0.0f, -1.0f, 0.0f};
+    MaskPins pins = MaskPins::none;
+    std::vector<std::array<std::uint32_t, 2>> pin_cells; ///< pins = list: (row, column) of '1' cells
+};
+/// An edge of a mask panel: a polyline of cells (row, column) along the panel's boundary, each leg from one corner
+/// to the next along a row, a column or a 45-degree diagonal; its particles are every cell on the legs, in order.
+struct MaskEdgeSpec {
+    std::uint32_t panel = 0; ///< index into MaskClothSpec::panels
+    std::vector<std::array<std::uint32_t, 2>> path;
+};
+/// A seam: the k-th particle of edge a joined to the k-th of edge b by a seam spring (both edges have as many
+/// particles), rest length rest_ratio x the mean of the two panels' cell sizes.
+struct MaskSeamSpec {
+    MaskEdgeSpec a, b;
+    float rest_ratio = 0.5f;
+};
+struct MaskClothSpec {
+    std::vector<MaskPanelSpec> panels;
+    std::vector<MaskSeamSpec> seams;
+    float density = 0.15f; ///< kg/m^2 (springs model; a fabric's is its own): mass = density x triangle area
+};
+
+/// The particles of a mask edge, in path order (the cells on each leg, corners once). Cells are not checked here.
+std::vector<std::array<std::uint32_t, 2>> mask_edge_cells(const MaskEdgeSpec& edge);
+
+/// Whether mask cell (row, column) holds a particle on the boundary of its panel's triangle mesh (add_mask_panel's
+/// triangles): on an edge of exactly one triangle, or in no triangle. False for a '0' cell or one outside the mask.
+bool mask_cell_on_boundary(const MaskPanel& mask, std::int64_t row, std::int64_t column);
+
 /// A simulation state saved with a scene (the "state" section): positions (m) and velocities (m/s) per particle, and
 /// the pinned particles. build_scene starts from it: its pins replace the scene's own.
 struct SceneState {
@@ -69,6 +108,7 @@ struct SceneSpec {
     TShirtParams tshirt;  ///< cloth.type = "tshirt"
     OutlineClothSpec outline; ///< cloth.type = "outline"
     MeshClothSpec mesh;       ///< cloth.type = "mesh"
+    MaskClothSpec masks;      ///< cloth.type = "mask"
     /// The material: a fabric in physical units (docs/fabric.md; "material": "denim" or an object of fabric fields)
     /// or the seeds' springs (the fields below). Grid cloths pass both to HangParams.
     MaterialModel model = MaterialModel::springs;
@@ -109,5 +149,15 @@ BuiltScene build_scene(const SceneSpec& spec);
 
 /// Particle count a spec will have, computed without building it (to refuse absurd sizes early).
 std::size_t scene_particle_count(const SceneSpec& spec);
+
+/// The resolution `drape run --size` and the viewer's resolution slider set: particles per side of a grid; cells per
+/// metre of a T-shirt or an outline (an outline's spacing is 1 / cells per metre: round(1 / spacing)); none for a mesh
+/// or a mask cloth (their resolution is the OBJ's, the masks' cells).
+std::optional<std::uint32_t> scene_resolution(const SceneSpec& spec);
+
+/// Sets that resolution: grid n (2..4096), T-shirt cells_per_metre (10..1000), outline spacing = 1 / size m (size
+/// 10..1000, and the outline's point limit). Throws InvalidInput starting with `flag` and naming the allowed range,
+/// or saying why it does not apply (a mesh, a mask cloth).
+void set_scene_resolution(SceneSpec& spec, std::uint32_t size, const std::string& flag = "--size");
 
 } // namespace drape
