@@ -191,10 +191,10 @@ template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, b
                 over.store(true, std::memory_order_relaxed);
             }
         }
-        // Collide after each sweep; its triangle pass after the first `passes` - 1 sweeps only (at least one), so the
-        // limit has the last sweeps (a sweep beyond `passes`, run while the limit is not yet met, moves little, and
-        // the triangle pass costs more than a sweep).
-        const bool triangles = pass + 1 < std::max<std::uint32_t>(sl.passes, 2);
+        // Collide after each sweep; its triangle pass after the first sweep and the last but one of the `passes`
+        // (the triangle pass costs more than a sweep), so the limit has the last sweep and the sweeps between.
+        const std::uint32_t last_but_one = std::max<std::uint32_t>(sl.passes, 2) - 2;
+        const bool triangles = pass == 0 || pass == last_but_one;
         if (with_collide) collide_stage<Parallel>(out, true, triangles ? 1 : 0);
         if (pass + 1 >= sl.passes && !over.load(std::memory_order_relaxed)) break;
     }
