@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstddef>
 #include <cstdlib>
 #include <new>
@@ -123,6 +124,38 @@ INSTANTIATE_TEST_SUITE_P(
                       AllocCase{KernelPath::csr, true, Integrator::symplectic_euler, false, MaterialModel::fabric},
                       AllocCase{KernelPath::grid, true, Integrator::symplectic_euler, true, MaterialModel::fabric,
                                 Solver::implicit}));
+
+// Self-collision (self_collide.cpp): its hash, buckets and accumulators are cooked once; a crumpled cloth on the
+// ground, in contact with itself, steps without allocating (both solvers).
+TEST(NoAllocation, SelfCollisionStepDoesNotAllocate) {
+    for (Solver solver : {Solver::explicit_euler, Solver::implicit}) {
+        Workers workers(3);
+        workers.run([&] {
+            HangParams hp;
+            hp.pins = GridPins::none;
+            SceneBuild scene = drape::testing::perturbed_hang(32, 0.1f, 0.0f, 9u, hp);
+            for (std::size_t i = 0; i < scene.initial.y.size(); ++i) { // folded in half: x > 0 over x < 0
+                float& x = scene.initial.x[i];
+                scene.initial.y[i] += x > 0.0f ? 0.01f + 0.04f * x : 0.01f;
+                if (x > 0.0f) x = -x + 0.01f;
+            }
+            SimulationParams p = drape::testing::default_params(scene.cloth);
+            p.solver = solver;
+            if (solver == Solver::implicit) p.dt = 1.0f / 120.0f;
+            p.colliders = {make_ground(0.0f, {0.002f, 0.5f})};
+            p.self_collision.thickness = 0.004f;
+            Simulation sim(std::move(scene.cloth), scene.initial, p);
+            sim.step(solver == Solver::implicit ? 30 : 600); // warm-up, and down onto the ground
+            allocations = 0;
+            counting = true;
+            sim.step(solver == Solver::implicit ? 10 : 100);
+            sim.step_serial(2);
+            counting = false;
+            EXPECT_EQ(allocations.load(), 0u);
+            EXPECT_GT(sim.self_contacts(), 0u) << "the stage ran with contacts";
+        });
+    }
+}
 
 // The viewer's strain-colouring stage runs every frame: cooked once, then compute() allocates nothing.
 TEST(NoAllocation, StrainFieldComputeDoesNotAllocate) {

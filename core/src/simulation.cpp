@@ -32,6 +32,7 @@ const char* stage_name(Stage stage) noexcept {
     case Stage::integrate: return "integrate";
     case Stage::strain_limit: return "strain_limit";
     case Stage::collide: return "collide";
+    case Stage::self_collide: return "self_collide";
     case Stage::count: break;
     }
     return "unknown";
@@ -79,6 +80,15 @@ void validate_params(const SimulationParams& p) {
                   p.implicit.chebyshev_rho < 1.0f,
               "implicit chebyshev rho", p.implicit.chebyshev_rho, "[0, 1) (0 = no acceleration)");
     }
+    {
+        const SelfCollision& sc = p.self_collision;
+        if (!(std::isfinite(sc.thickness) && (sc.thickness == 0.0f || (sc.thickness >= self_collision_min_thickness &&
+                                                                        sc.thickness <= self_collision_max_thickness))))
+            throw InvalidInput("self_collision.thickness = " + std::to_string(sc.thickness) +
+                               " is outside the allowed range 0 (off) or [0.0005, 0.05] m");
+        check(std::isfinite(sc.friction) && sc.friction >= 0.0f && sc.friction <= 2.0f, "self_collision.friction",
+              sc.friction, "[0, 2]");
+    }
     if (p.colliders.size() > 64)
         throw InvalidInput("colliders: " + std::to_string(p.colliders.size()) + " given, at most 64 allowed");
     for (std::size_t k = 0; k < p.colliders.size(); ++k) {
@@ -118,6 +128,7 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
     if (params_.strain_limit.ratio > 0.0f) cook_strain_limit();
     if (params_.aero.enabled) cook_aero();
     if (!params_.colliders.empty()) cook_triangle_contact();
+    if (params_.self_collision.thickness > 0.0f) cook_self_collision();
     if (params_.solver == Solver::implicit) cook_implicit();
 
     StateBuffer& s = buffers_[0];
@@ -180,6 +191,7 @@ void Simulation::set_params(const SimulationParams& params) {
     if (params_.strain_limit.ratio > 0.0f) cook_strain_limit();
     if (params_.aero.enabled) cook_aero();
     if (!params_.colliders.empty()) cook_triangle_contact();
+    if (params_.self_collision.thickness > 0.0f) cook_self_collision();
     if (params_.solver == Solver::implicit) cook_implicit();
     monitor_.init(cloth_, params_);
     rebaseline_ = true;
@@ -266,6 +278,7 @@ std::vector<std::string> Simulation::stage_names() const {
         if (params_.aero.enabled) out.insert(out.begin(), "aero_forces");
         if (params_.strain_limit.ratio > 0.0f) out.push_back("strain_limit");
         if (!params_.colliders.empty()) out.push_back("collide");
+        if (params_.self_collision.thickness > 0.0f) out.push_back("self_collide");
         return out;
     }
     std::vector<std::string> out{"external_forces", "spring_forces", "spring_damping", "integrate", "pins"};
@@ -274,6 +287,7 @@ std::vector<std::string> Simulation::stage_names() const {
     if (params_.aero.enabled) out.insert(out.begin() + 1, "aero_forces");
     if (params_.strain_limit.ratio > 0.0f) out.push_back("strain_limit");
     if (!params_.colliders.empty()) out.push_back("collide");
+    if (params_.self_collision.thickness > 0.0f) out.push_back("self_collide");
     return out;
 }
 

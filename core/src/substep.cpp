@@ -220,6 +220,7 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
         StateBuffer& out = buffers_[1 - current_];
         const bool collide = !params_.colliders.empty();
         if (!strain_limit_stage<Parallel>(out, collide) && collide) collide_stage<Parallel>(out);
+        if (params_.self_collision.thickness > 0.0f) self_collide_stage<Parallel>(out);
         current_ = 1 - current_;
         ++steps_done_;
         if (steps_done_ % check_every == 0) check_health<Parallel>();
@@ -242,6 +243,8 @@ void Simulation::run_stage(Stage stage) {
     if (stage == Stage::seam_forces) return cloth_.seams.empty() ? void() : seam_forces_stage<true>();
     if (stage == Stage::strain_limit) return void(strain_limit_stage<true>(cur(), false));
     if (stage == Stage::collide) return collide_stage<true>(cur());
+    if (stage == Stage::self_collide)
+        return params_.self_collision.thickness > 0.0f ? self_collide_stage<true>(cur()) : void();
     const kernels::StepContext c = make_context(steps_done_);
     const Integrator integ = params_.integrator;
     for_each_block<true>(cloth_, [&](std::size_t b, std::size_t begin, std::size_t end) {

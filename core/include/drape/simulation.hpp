@@ -77,6 +77,17 @@ struct AeroWind {
     std::array<float, 3> velocity{0.0f, 0.0f, 5.0f}; ///< wind velocity, m/s, |each| <= 100
 };
 
+/// Self-collision (cloth against cloth, docs/self_collision.md; core/src/self_collide.cpp): every particle is kept at
+/// least `thickness` from every triangle not containing it, and every edge from every edge sharing no vertex with
+/// it, on the side it was on at the start of the step; approaching normal velocity is removed and Coulomb friction
+/// applied. Runs after the collide stage, both solvers.
+struct SelfCollision {
+    float thickness = 0.0f; ///< m, 0 = off, else [0.0005, 0.05]
+    float friction = 0.3f;  ///< Coulomb coefficient, [0, 2]
+};
+inline constexpr float self_collision_min_thickness = 0.0005f;
+inline constexpr float self_collision_max_thickness = 0.05f;
+
 struct SimulationParams {
     /// s: one explicit substep, which must be below the explicit stability bound (stability.hpp), or one implicit
     /// step (any length up to 0.1 s, typically a frame).
@@ -93,6 +104,7 @@ struct SimulationParams {
     StrainLimit strain_limit;
     /// Analytic colliders, positions relative to Cloth::origin; applied in order after strain limiting.
     std::vector<Collider> colliders;
+    SelfCollision self_collision; ///< off by default (thickness 0)
 };
 
 /// Hot state: one buffer of the double-buffered SoA arrays. u, v, w hold velocities (symplectic Euler) or the
@@ -114,7 +126,7 @@ struct Health {
 };
 
 /// Per-stage names in step order; the same strings label bench counters and profiler zones.
-enum class Stage : std::uint8_t { aero_forces, seam_forces, external_forces, spring_forces, integrate, strain_limit, collide, count };
+enum class Stage : std::uint8_t { aero_forces, seam_forces, external_forces, spring_forces, integrate, strain_limit, collide, self_collide, count };
 const char* stage_name(Stage stage) noexcept;
 
 class Simulation {
@@ -185,6 +197,9 @@ class Simulation {
 
     /// Figures of the last implicit step (iterations, residual); zeros before the first.
     const ImplicitStats& implicit_stats() const noexcept { return implicit_stats_; }
+    /// Self-collision contacts (point-triangle and edge-edge pairs closer than the thickness) found in the first
+    /// round of the last step; 0 when self-collision is off.
+    std::size_t self_contacts() const noexcept { return sc_contacts_; }
     /// The implicit solver's cooked data of the cloth itself (empty until the implicit solver is first chosen).
     const VbdGraph& vbd_graph() const noexcept;
 
@@ -261,6 +276,21 @@ class Simulation {
     std::vector<float> core_measure_; ///< per collider, per particle: core_measure (triangle_contact.hpp)
     void cook_triangle_contact();
     void cook_vertex_triangles();
+    // Self-collision (self_collide.cpp; cooked when first enabled): the cloth's unique edges, a spatial hash of
+    // triangles and of edges rebuilt every round from the positions (counting sort into buckets: sizes fixed at
+    // cooking, at most 8 cells per primitive), and per particle fixed-point accumulators of the pushes (integer sums
+    // are exact, so the result does not depend on the order in which threads add).
+    template <bool Parallel> void self_collide_stage(StateBuffer& out);
+    template <bool Parallel> std::size_t self_collide_round(StateBuffer& out, const StateBuffer& start, bool& deep);
+    void cook_self_collision();
+    std::vector<std::uint32_t> sc_edges_;            ///< 2 per edge, a < b
+    std::vector<std::uint32_t> sc_tri_count_, sc_tri_start_, sc_tri_items_;   ///< bucket counts, starts, triangles
+    std::vector<std::uint32_t> sc_edge_count_, sc_edge_start_, sc_edge_items_; ///< the same for edges
+    std::vector<float> sc_tri_box_, sc_edge_box_; ///< per triangle / edge: its grown box (lo xyz, hi xyz)
+    std::vector<std::int64_t> sc_acc_;  ///< per particle: dx, dy, dz, dvx, dvy, dvz (fixed point)
+    std::vector<std::uint32_t> sc_hits_; ///< per particle: contacts that pushed it
+    std::vector<float> sc_block_max_;    ///< per block of edges: the longest edge (cell size)
+    std::size_t sc_contacts_ = 0;        ///< contacts found in the last step (first round)
     template <bool Parallel> void seam_forces_stage();
     template <bool Parallel> void aero_forces_stage();
     void cook_aero();
