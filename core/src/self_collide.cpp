@@ -6,8 +6,8 @@
 //   - point-triangle: a particle closer than h to a triangle that does not contain it;
 //   - edge-edge: two edges sharing no vertex, closer than h.
 // Pairs of 1-ring neighbours (the point shares a triangle with a vertex of the triangle; an endpoint of one edge
-// shares a triangle with an endpoint of the other) are skipped: on a flat fine cloth they lie within h of each other
-// at rest.
+// shares a triangle with an endpoint of the other) are skipped when h exceeds half the shortest edge: on such a fine
+// flat cloth they lie within h of each other at rest. On a coarser cloth they count (a sharp crease needs them).
 // Which side: the normal is oriented by the side the pair was on at the start of the step (the positions of buffer A),
 // so a particle that crossed a triangle during the step is put back, not pushed through.
 // Response: the pair is pushed apart to distance h along that normal, with inverse-mass weights (the point and the
@@ -106,7 +106,7 @@ void Simulation::cook_self_collision() {
     sc_edge_box_.assign(6 * edges, 0.0f);
     sc_acc_.assign(6 * n, 0);
     sc_hits_.assign(n, 0);
-    sc_block_max_.assign((edges + sc_block - 1) / sc_block, 0.0f);
+    sc_block_max_.assign(2 * ((edges + sc_block - 1) / sc_block), 0.0f);
 }
 
 template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out) {
@@ -138,18 +138,29 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const StateBuffer& 
     float *x = out.x.data(), *y = out.y.data(), *z = out.z.data();
     const float *x0 = start.x.data(), *y0 = start.y.data(), *z0 = start.z.data();
 
-    // Cell size: the longest edge now (a per-block maximum, then the maximum of those: exact whatever the order).
+    // Cell size: the longest edge now; the shortest decides whether 1-ring neighbours are exempt (per-block extremes,
+    // then the extremes of those: exact whatever the order).
     for_blocks<Parallel>(edges, [&](std::size_t begin, std::size_t end) {
-        float m = 0.0f;
+        float hi = 0.0f, lo = std::numeric_limits<float>::max();
         for (std::size_t e = begin; e < end; ++e) {
             const std::uint32_t a = edge[2 * e], b = edge[2 * e + 1];
             const float dx = x[a] - x[b], dy = y[a] - y[b], dz = z[a] - z[b];
-            m = std::max(m, dx * dx + dy * dy + dz * dz);
+            const float l2 = dx * dx + dy * dy + dz * dz;
+            hi = std::max(hi, l2);
+            lo = std::min(lo, l2);
         }
-        sc_block_max_[begin / sc_block] = m;
+        sc_block_max_[2 * (begin / sc_block)] = hi;
+        sc_block_max_[2 * (begin / sc_block) + 1] = lo;
     });
-    float longest2 = 0.0f;
-    for (float m : sc_block_max_) longest2 = std::max(longest2, m);
+    float longest2 = 0.0f, shortest2 = std::numeric_limits<float>::max();
+    for (std::size_t k = 0; k < sc_block_max_.size(); k += 2) {
+        longest2 = std::max(longest2, sc_block_max_[k]);
+        shortest2 = std::min(shortest2, sc_block_max_[k + 1]);
+    }
+    // 1-ring neighbours (a point and a triangle one edge apart, two edges across one triangle) lie about 0.7 of an
+    // edge apart on a flat cloth: within h of each other at rest once h > half the shortest edge. Only then are they
+    // exempt; on a coarser cloth they are contacts like any other (a sharp crease needs them).
+    const bool ring_exempt = h > 0.5f * std::sqrt(shortest2);
     const float cell = 1.01f * (std::sqrt(longest2) + 2.0f * h);
     const float inv_cell = 1.0f / cell;
     auto cell_of = [&](float v) { return std::int64_t(std::floor(v * inv_cell)); };
@@ -224,6 +235,7 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const StateBuffer& 
     // 1-ring neighbours (or the same particle): u shares a triangle with v.
     auto near = [&](std::uint32_t u, std::uint32_t v) {
         if (u == v) return true;
+        if (!ring_exempt) return false;
         for (std::uint32_t k = vertex_tri_offsets_[u]; k < vertex_tri_offsets_[u + 1]; ++k) {
             const std::uint32_t t = vertex_tris_[k];
             if (tri[3 * t] == v || tri[3 * t + 1] == v || tri[3 * t + 2] == v) return true;

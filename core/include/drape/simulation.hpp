@@ -289,7 +289,7 @@ class Simulation {
     std::vector<float> sc_tri_box_, sc_edge_box_; ///< per triangle / edge: its grown box (lo xyz, hi xyz)
     std::vector<std::int64_t> sc_acc_;  ///< per particle: dx, dy, dz, dvx, dvy, dvz (fixed point)
     std::vector<std::uint32_t> sc_hits_; ///< per particle: contacts that pushed it
-    std::vector<float> sc_block_max_;    ///< per block of edges: the longest edge (cell size)
+    std::vector<float> sc_block_max_;    ///< per block of edges: the longest and shortest edge, squared
     std::size_t sc_contacts_ = 0;        ///< contacts found in the last step (first round)
     template <bool Parallel> void seam_forces_stage();
     template <bool Parallel> void aero_forces_stage();
