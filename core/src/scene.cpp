@@ -993,6 +993,15 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
     p.strain_limit.passes = sl.integer("passes", 1, 100, 4);
     p.strain_limit.every = sl.integer("every", 1, 1000, 1);
     sl.finish();
+    ObjectReader sc = ph.object("self_collision");
+    const double thickness = sc.number("thickness", 0.0, double(self_collision_max_thickness), " m (0 = off)", 0.0);
+    if (thickness != 0.0 && thickness < double(self_collision_min_thickness))
+        sc.fail(sc.at("thickness"), "= " + format_number(thickness) +
+                                        " m is outside the allowed range 0 (off) or [0.0005, 0.05] m");
+    p.self_collision.thickness = static_cast<float>(thickness);
+    p.self_collision.friction =
+        static_cast<float>(sc.number("friction", 0.0, 2.0, "", double(p.self_collision.friction)));
+    sc.finish();
     ph.finish();
 
     // colliders

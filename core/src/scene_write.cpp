@@ -289,6 +289,11 @@ std::string to_json(const SceneSpec& s, const SceneState* state, const std::file
         .add("method", str(p.implicit.method == ImplicitMethod::jacobi ? "jacobi" : "gauss_seidel"));
     ph.add("implicit", im.object());
     ph.add("wind", wind.object()).add("aero", aero.object()).add("strain_limit", sl.object());
+    if (p.self_collision.thickness > 0.0f) { // off: left out, as scenes written before it
+        Fields sc;
+        sc.add("thickness", num(p.self_collision.thickness)).add("friction", num(p.self_collision.friction));
+        ph.add("self_collision", sc.object());
+    }
     out += "  \"physics\": " + ph.object() + ",\n";
     out += "  \"colliders\": [";
     for (std::size_t k = 0; k < p.colliders.size(); ++k)
