@@ -15,6 +15,8 @@
 // W = sum alpha_i^2 w_i, so the gap opens exactly to h and a pinned vertex does not move); the relative normal velocity,
 // if approaching, is removed and Coulomb friction takes mu |v_n| off the relative tangential velocity, distributed
 // with the same weights. Each particle takes the mean of what its contacts ask (Jacobi, as the triangle pass does).
+// A pair held at the thickness already (within 1%) and not approaching is left alone; a second and third round run
+// only after a push of more than h / 2.
 //
 // Broad phase: a spatial hash of cubic cells of size c = 1.01 (longest edge now + 2 h), rebuilt each round. Every
 // triangle (its box grown by h) and every edge (grown by h / 2) is entered in the buckets of the cells its box
@@ -106,7 +108,7 @@ void Simulation::cook_self_collision() {
     sc_edge_box_.assign(6 * edges, 0.0f);
     sc_acc_.assign(6 * n, 0);
     sc_hits_.assign(n, 0);
-    sc_block_max_.assign(2 * ((edges + sc_block - 1) / sc_block), 0.0f);
+    sc_block_extremes_.assign(2 * ((edges + sc_block - 1) / sc_block), 0.0f);
 }
 
 template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out) {
@@ -149,13 +151,13 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const StateBuffer& 
             hi = std::max(hi, l2);
             lo = std::min(lo, l2);
         }
-        sc_block_max_[2 * (begin / sc_block)] = hi;
-        sc_block_max_[2 * (begin / sc_block) + 1] = lo;
+        sc_block_extremes_[2 * (begin / sc_block)] = hi;
+        sc_block_extremes_[2 * (begin / sc_block) + 1] = lo;
     });
     float longest2 = 0.0f, shortest2 = std::numeric_limits<float>::max();
-    for (std::size_t k = 0; k < sc_block_max_.size(); k += 2) {
-        longest2 = std::max(longest2, sc_block_max_[k]);
-        shortest2 = std::min(shortest2, sc_block_max_[k + 1]);
+    for (std::size_t k = 0; k < sc_block_extremes_.size(); k += 2) {
+        longest2 = std::max(longest2, sc_block_extremes_[k]);
+        shortest2 = std::min(shortest2, sc_block_extremes_[k + 1]);
     }
     // 1-ring neighbours (a point and a triangle one edge apart, two edges across one triangle) lie about 0.7 of an
     // edge apart on a flat cloth: within h of each other at rest once h > half the shortest edge. Only then are they

@@ -197,8 +197,8 @@ class Simulation {
 
     /// Figures of the last implicit step (iterations, residual); zeros before the first.
     const ImplicitStats& implicit_stats() const noexcept { return implicit_stats_; }
-    /// Self-collision contacts (point-triangle and edge-edge pairs closer than the thickness) found in the first
-    /// round of the last step; 0 when self-collision is off.
+    /// Self-collision contacts applied in the first round of the last step: point-triangle and edge-edge pairs closer
+    /// than the thickness, less those already held at it (within 1%) and not approaching; 0 when self-collision is off.
     std::size_t self_contacts() const noexcept { return sc_contacts_; }
     /// The implicit solver's cooked data of the cloth itself (empty until the implicit solver is first chosen).
     const VbdGraph& vbd_graph() const noexcept;
@@ -289,8 +289,8 @@ class Simulation {
     std::vector<float> sc_tri_box_, sc_edge_box_; ///< per triangle / edge: its grown box (lo xyz, hi xyz)
     std::vector<std::int64_t> sc_acc_;  ///< per particle: dx, dy, dz, dvx, dvy, dvz (fixed point)
     std::vector<std::uint32_t> sc_hits_; ///< per particle: contacts that pushed it
-    std::vector<float> sc_block_max_;    ///< per block of edges: the longest and shortest edge, squared
-    std::size_t sc_contacts_ = 0;        ///< contacts found in the last step (first round)
+    std::vector<float> sc_block_extremes_;    ///< per block of edges: the longest and shortest edge, squared
+    std::size_t sc_contacts_ = 0;        ///< contacts applied in the last step's first round (self_contacts)
     template <bool Parallel> void seam_forces_stage();
     template <bool Parallel> void aero_forces_stage();
     void cook_aero();
