@@ -130,6 +130,16 @@ int main(int argc, char** argv) {
         ->check(in_range<std::uint32_t>(1, 100));
     cmd->add_option("--strain-every", run.strain_every, "Run strain limiting after every K-th substep [scene's, 1]")
         ->check(in_range<std::uint32_t>(1, 1000));
+    cmd->add_option("--self-collision", run.self_collision,
+                    "Self-collision thickness in m: 0 = off, or 0.0005 to 0.05 (docs/self_collision.md) [scene's, 0]")
+        ->check(in_range<float>(0.0f, 0.05f, " m (0 = off; on: at least 0.0005)"))
+        ->check(CLI::Validator(
+            [](std::string& text) -> std::string {
+                const double t = std::strtod(text.c_str(), nullptr);
+                return t > 0.0 && t < 0.0005 ? "'" + text + "' is below 0.0005 m; allowed 0 (off) or [0.0005, 0.05] m"
+                                             : std::string();
+            },
+            ""));
     auto* obj = cmd->add_option("--export-obj", run.export_obj,
                                 "Write OBJ frames (vertices, normals, faces) into this directory");
     cmd->add_option("--every", run.export_every, "Substeps between exported OBJ frames")

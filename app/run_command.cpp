@@ -105,6 +105,7 @@ int run_command(const RunOptions& o) {
     if (o.strain_limit) spec.physics.strain_limit.ratio = *o.strain_limit;
     if (o.strain_passes) spec.physics.strain_limit.passes = *o.strain_passes;
     if (o.strain_every) spec.physics.strain_limit.every = *o.strain_every;
+    if (o.self_collision) spec.physics.self_collision.thickness = *o.self_collision;
     spec.physics.kernel = o.kernel == "grid" ? KernelPath::grid : o.kernel == "csr" ? KernelPath::csr : KernelPath::automatic;
     spec.physics.fused = !o.staged;
     if (o.dt) spec.dt = static_cast<float>(*o.dt);
@@ -219,6 +220,8 @@ int run_command(const RunOptions& o) {
     j["strain_passes"] = sp.strain_limit.passes;
     j["strain_every"] = sp.strain_limit.every;
     j["colliders"] = sp.colliders.size();
+    j["self_collision"] = {{"thickness", sp.self_collision.thickness}, {"friction", sp.self_collision.friction},
+                           {"contacts", sim.self_contacts()}};
     j["seam_springs"] = sim.cloth().seams.a.size();
     j["seam_colours"] = sim.cloth().seams.groups.colour_count;
     if (exporter) j["obj_frames"] = frames_written;

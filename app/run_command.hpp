@@ -32,6 +32,7 @@ struct RunOptions {
     std::optional<float> strain_limit;
     std::optional<std::uint32_t> strain_passes;
     std::optional<std::uint32_t> strain_every;
+    std::optional<float> self_collision; ///< thickness, m (0 = off)
     std::optional<std::string> export_obj; ///< directory for OBJ frames
     std::uint32_t export_every = 100;      ///< substeps between exported frames
     bool json = false;
