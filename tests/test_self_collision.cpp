@@ -77,7 +77,7 @@ TEST(SelfCollisionGeometry, ClosestSegmentPointsMatchDenseSampling) {
 // in exact integer arithmetic (differences < 2^32, products of three < 2^96 in __int128). Touching counts as meeting.
 
 using I3 = std::array<std::int64_t, 3>;
-using i128 = __int128;
+__extension__ typedef __int128 i128; // GCC / Clang extension (exact predicates)
 
 I3 snap(float x, float y, float z) {
     constexpr double scale = 1073741824.0; // 2^30
