@@ -128,6 +128,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadFile{"bad_vec", R"({"physics": {"gravity": [0, -9.81]}})", "physics.gravity must be an array of 3"},
         BadFile{"nan_like", R"({"physics": {"drag": -1}})", "physics.drag"},
         BadFile{"dt_range", R"({"physics": {"dt": 5}})", "physics.dt"},
+        BadFile{"sewing_speed", R"({"physics": {"sewing_speed": 20}})", "physics.sewing_speed"},
         BadFile{"collider_type", R"({"colliders": [{"type": "cube"}]})", "colliders[0].type"},
         BadFile{"collider_missing_type", R"({"colliders": [{"radius": 1}]})", "colliders[0].type is required"},
         BadFile{"collider_radius", R"({"colliders": [{"type": "sphere", "radius": -1}]})", "colliders[0].radius"},
