@@ -169,30 +169,38 @@ TEST(TShirtSewn, SeamRestFollowsTheScheduleAndBadSpeedsAreRefused) {
     }
 }
 
-// Not a passing test yet (issue 9: "a grabbed T-shirt hem dragged 30 cm and released stays on the body"): a
-// measurement, run with --gtest_also_run_disabled_tests. The front hem is dragged 0.28 m forward and 0.1 m down over
-// 0.5 s and released; measured (README of docs/garments.md, "Sewing"): the shoulder seams slide off the shoulders'
-// ends into the armpits and the sleeves ride 15 cm up the arms; a few triangles end in the armpit crease between the
-// shoulders and the arm ellipsoids.
-TEST(TShirtSewn, DISABLED_HemDraggedThirtyCentimetresAndReleased) {
-    const SceneSpec spec = load_scene("tshirt");
+// Issue 9: "a grabbed T-shirt hem dragged 30 cm and released stays on the body". The front hem is dragged 0.28 m
+// forward and 0.1 m down over 0.5 s, then released. (With the strain limit at 10 % the knit could not give: the limit
+// fought the grab until the health monitor stopped the run at 101 % strain; jersey is limited at 30 % now.)
+TEST(TShirtSewn, HemDraggedThirtyCentimetresAndReleasedStaysOn) {
+    SceneSpec spec = load_scene("tshirt");
+    if (const char* r = std::getenv("DRAPE_SHIRT_LIMIT")) spec.physics.strain_limit.ratio = float(std::atof(r));
     BuiltScene b = build_scene(spec);
+    if (const char* f = std::getenv("DRAPE_SHIRT_FRICTION"))
+        for (Collider& c : b.params.colliders) c.friction = float(std::atof(f));
     Simulation sim(std::move(b.cloth), b.initial, b.params);
     const float dt = sim.params().dt;
     sim.step(static_cast<std::size_t>(1.5 / dt));
     const TShirtBuild t = build_tshirt(spec.tshirt);
+    struct TopRow {
+        float lowest = 1e9f, cuff = 1e9f; // lowest top-row particle (y), the cuff nearest the body (|x|)
+        std::size_t in_body = 0;
+    };
     auto top_row = [&](const char* when) {
-        float lowest = 1e9f, cuff = 0.0f;
+        TopRow r;
         for (const MaskPanelBuild* panel : {&t.front, &t.back})
             for (std::int64_t c = 0; c < panel->columns; ++c)
                 if (const std::int32_t i = panel->particle_at(0, c); i >= 0) {
-                    lowest = std::min(lowest, float(sim.y()[std::size_t(i)] + sim.cloth().origin[1]));
-                    if (c == 0) cuff = std::max(cuff, std::fabs(float(sim.x()[std::size_t(i)] + sim.cloth().origin[0])));
+                    r.lowest = std::min(r.lowest, float(sim.y()[std::size_t(i)] + sim.cloth().origin[1]));
+                    if (c == 0 || c == panel->columns - 1)
+                        r.cuff = std::min(r.cuff, std::fabs(float(sim.x()[std::size_t(i)] + sim.cloth().origin[0])));
                 }
-        std::printf("%s: lowest top-row particle y = %.3f m, a cuff at |x| = %.3f m, triangles in the body %zu\n", when,
-                    lowest, cuff, triangles_in_body(sim));
+        r.in_body = triangles_in_body(sim);
+        std::printf("%s: lowest top-row particle y = %.3f m, the cuffs at |x| >= %.3f m, triangles in the body %zu\n",
+                    when, r.lowest, r.cuff, r.in_body);
+        return r;
     };
-    top_row("settled");
+    const TopRow settled = top_row("settled");
     const std::size_t hem = std::size_t(t.front.particle_at(t.front.rows - 1, t.front.columns / 2));
     const std::array<float, 3> p0{sim.x()[hem], sim.y()[hem], sim.z()[hem]};
     sim.grab(hem, p0);
@@ -202,11 +210,18 @@ TEST(TShirtSewn, DISABLED_HemDraggedThirtyCentimetresAndReleased) {
         sim.move_grab({p0[0], p0[1] - 0.1f * s, p0[2] + 0.28f * s});
         sim.step(static_cast<std::size_t>(0.01 / dt));
     }
-    top_row("dragged");
+    EXPECT_GT(sim.z()[hem], p0[2] + 0.25f) << "the hem was not dragged";
+    const TopRow dragged = top_row("dragged");
     sim.release_grab();
     sim.step(static_cast<std::size_t>(1.5 / dt));
-    top_row("1.5 s after release");
-    EXPECT_TRUE(sim.health().finite);
+    const TopRow after = top_row("1.5 s after release");
+    ASSERT_TRUE(sim.health().finite);
+    for (const TopRow* r : {&settled, &dragged, &after}) {
+        EXPECT_GT(r->lowest, 0.18f) << "the shoulder line slid below the armpits";
+        EXPECT_GT(r->cuff, 0.38f) << "a sleeve rode up the arm";
+        EXPECT_EQ(r->in_body, 0u) << "triangles through the body";
+    }
+    EXPECT_LT(sim.z()[hem], p0[2] + 0.1f) << "the hem did not fall back";
 }
 
 TEST(TShirtSewn, DISABLED_Probe) {
@@ -214,6 +229,7 @@ TEST(TShirtSewn, DISABLED_Probe) {
     SceneSpec spec = load_scene("tshirt");
     if (env) spec.tshirt.cells_per_metre = float(std::atof(env));
     if (std::getenv("DRAPE_SHIRT_NOLIMIT")) spec.physics.strain_limit.ratio = 0.0f;
+    if (const char* r = std::getenv("DRAPE_SHIRT_LIMIT")) spec.physics.strain_limit.ratio = float(std::atof(r));
     if (const char* r = std::getenv("DRAPE_SHIRT_SEAM")) spec.tshirt.seam_rest_ratio = float(std::atof(r));
     if (const char* v = std::getenv("DRAPE_SHIRT_SEW")) spec.physics.sewing_speed = float(std::atof(v));
     if (std::getenv("DRAPE_SHIRT_IMPLICIT")) spec.physics.solver = Solver::implicit;
