@@ -4,9 +4,11 @@
 // The seam spring then pulls only by what the cloth lags behind the schedule, so the panels are drawn together
 // smoothly instead of snapping shut in one substep. Every consumer of a seam's rest length reads the current one:
 // seam_forces (seam_rest_), strain limiting (its copy, limit_rest_), the implicit solver (vbd::Solver::set_spring_rest)
-// and the health figures (edge_rest_). Serial and O(seams) per step while a seam is still closing; nothing after.
+// and the health figures (edge_rest_). Serial, while a seam is still closing (nothing after): O(seams) per explicit
+// substep; an implicit step also refreshes the solver's rest copies whole (O(springs), small beside its sweeps).
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "drape/errors.hpp"
 #include "drape/simulation.hpp"
@@ -47,7 +49,9 @@ void Simulation::update_sewing() {
     if (!sewing_) return;
     // One step of the schedule, in float: the same arithmetic whether the run was saved and resumed or not.
     const SeamSet& s = cloth_.seams;
-    const float closing = params_.sewing_speed * params_.dt;
+    // Sewing switched off mid-run (set_params): the seams go to their rest length at once, as unsewn seams do.
+    const float closing = params_.sewing_speed > 0.0f ? params_.sewing_speed * params_.dt
+                                                      : std::numeric_limits<float>::infinity();
     bool open = false;
     for (std::size_t k = 0; k < s.a.size(); ++k) {
         const float rest = std::max(s.rest[k], seam_rest_[k] - closing);
@@ -58,7 +62,7 @@ void Simulation::update_sewing() {
     for (std::size_t k = 0; k < limit_seam_slot_.size(); ++k)
         limit_rest_[limit_seam_slot_[k]] = edge_rest_[limit_seam_edge_[k]];
     if (implicit_) implicit_->fine.set_spring_rest(edge_rest_);
-    sewing_ = open && params_.sewing_speed > 0.0f;
+    sewing_ = open;
 }
 
 } // namespace drape
