@@ -210,6 +210,11 @@ int main(int argc, char** argv) {
     view_cmd->add_flag("--no-ui", no_ui, "Hide the panels and the stats overlay (Tab toggles them)");
     view_cmd->add_flag("--full-mesh", view.full_mesh,
                        "Draw every triangle (default: grids finer than 256 x 256 are drawn at a coarser level of detail)");
+    view_cmd->add_option("--camera-yaw", view.camera_yaw_deg,
+                         "Camera angle around the vertical, degrees: 0 looks from +z (a garment's front), 90 from +x, "
+                         "180 from behind [default: the scene's view, front-right]")
+        ->check(CLI::Range(-360.0f, 360.0f))
+        ->option_text("DEG:[-360, 360]");
     // Hidden automation hooks (documentation screenshots and tests).
     view_cmd->add_flag("--panels-open", view.panels_open, "Expand every panel")->group("");
     view_cmd->add_flag("--demo-grab", view.demo_grab, "Grab and drag the free corner half-way through --frames")

@@ -169,6 +169,10 @@ void Viewer::reset_camera() {
         camera_.yaw = wind_yaw + 1.3f;
         camera_.pitch = 0.2f;
     }
+    if (options_.camera_yaw_deg) {
+        camera_.yaw = *options_.camera_yaw_deg * 3.14159265f / 180.0f;
+        camera_.pitch = 0.15f;
+    }
     int w = 1, h = 1;
     glfwGetWindowSize(window_, &w, &h);
     const float free_aspect = float(std::max(w - static_cast<int>(panel_width()), 1)) / float(std::max(h, 1));

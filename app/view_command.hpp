@@ -28,6 +28,7 @@ struct ViewOptions {
     bool stats_json = false;  ///< one JSON object on stdout at exit
     bool ui = true;           ///< panels and overlay
     bool full_mesh = false;   ///< draw every triangle (no level of detail for fine grids)
+    std::optional<float> camera_yaw_deg; ///< camera around the vertical, degrees: 0 from +z (the front), 180 the back
     // Hidden automation hooks (documentation screenshots, tests).
     bool panels_open = false; ///< every panel section expanded
     bool demo_grab = false;   ///< grab the free corner half-way through --frames and drag it

@@ -43,9 +43,18 @@ if [ "$asan" = 1 ]; then
     cmake --preset asan >/dev/null
     cmake --build --preset asan -j "$jobs"
     # tests/lsan.supp: allocations made inside the UBSan runtime itself (per-thread data of threads alive at exit).
+    # Long physics runs are left to the Release pass above: each repeats, for thousands of steps, code paths that
+    # shorter tests run under the sanitizers too (the grid fabric, the disc and sphere drops, Verlet at rest, the N = 100
+    # strain limit, the 64 x 64 implicit drop), and together they take ~800 s of CPU under ASan (~7 of CI's ~38 minutes).
+    # DRAPE_ASAN_ALL=1 runs them as well.
+    release_only='^(FabricGrid\.HangsOneSecondHealthyAtN64|MeshCloth\.DiscDropsOntoTheSphereAndStaysHealthy'
+    release_only+='|Physics\.VerletSettlesLikeEulerAtRest|StrainLimit\.KeepsMaxStrainWithinTheLimitAtN100'
+    release_only+='|Sizes/TriangleContactDrop\.NoTriangleEndsInsideAnyColliderKind/n64_implicit)( .*)?$'
+    exclude=()
+    if [ "${DRAPE_ASAN_ALL:-0}" != 1 ]; then exclude=(-E "$release_only"); fi
     ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1} \
     LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/tests/lsan.supp:print_suppressions=0} \
     UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1} \
-        ctest_once_more ctest --preset asan -j "$jobs"
+        ctest_once_more ctest --preset asan -j "$jobs" "${exclude[@]}"
 fi
 echo "== all tests passed"

@@ -11,24 +11,14 @@
 
 #include "drape/errors.hpp"
 #include "drape/scene.hpp"
+#include "scene_test_util.hpp"
 #include "drape/scene_write.hpp"
 
 using namespace drape;
+using drape::testing::has;
+using drape::testing::scene_error_of;
 
 namespace {
-
-std::string error_of(const std::string& json) {
-    try {
-        parse_scene(json, "test.json");
-    } catch (const InvalidInput& e) {
-        return e.what();
-    }
-    return "";
-}
-
-bool has(const std::string& text, const std::string& part) {
-    return text.find(part) != std::string::npos;
-}
 
 /// A springs-model mask scene: two 4 x 5 panels facing each other 5 cm apart (the back one mirrored), sewn along
 /// their left and right columns (a tube), the front panel's top row pinned, the back's cell (0, 2) pinned by list,
@@ -152,7 +142,7 @@ TEST(SceneMasks, FabricMassesComeFromTheFabricsDensity) {
     // A density beside a fabric is a second answer: refused.
     std::string both = tube;
     both.replace(both.find("{ \"stiffness\": 2000 }"), 21, "\"denim\"");
-    EXPECT_TRUE(has(error_of(both), "test.json: cloth.density is a spring-model field")) << error_of(both);
+    EXPECT_TRUE(has(scene_error_of(both), "test.json: cloth.density is a spring-model field")) << scene_error_of(both);
 }
 
 TEST(SceneMasks, TankTopExampleIsSewnWithDensityMasses) {
@@ -232,7 +222,7 @@ TEST(SceneMasks, BrokenFilesGiveClearErrors) {
          "cloth.seams[0].rest_ratio = 3 is outside the allowed range [0.01, 2]"},
     };
     for (const auto& [text, want] : cases) {
-        const std::string msg = error_of(text);
+        const std::string msg = scene_error_of(text);
         EXPECT_TRUE(has(msg, want)) << "want: " << want << "\ngot:  " << msg;
         EXPECT_TRUE(has(msg, "test.json: ")) << msg;
         EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
@@ -241,7 +231,7 @@ TEST(SceneMasks, BrokenFilesGiveClearErrors) {
     std::string rows;
     for (int k = 0; k < 4097; ++k)
         rows += std::string(k ? "," : "") + "\"1\"";
-    EXPECT_TRUE(has(error_of(scene(R"({"name": "a", "rows": [)" + rows + "]}")),
+    EXPECT_TRUE(has(scene_error_of(scene(R"({"name": "a", "rows": [)" + rows + "]}")),
                     "cloth.panels[0].rows has 4097 entries (at most 4096)"));
 }
 

@@ -10,21 +10,13 @@
 #include <unistd.h>
 
 #include "drape/scene.hpp"
+#include "scene_test_util.hpp"
 
 using namespace drape;
+using drape::testing::has;
+using drape::testing::scene_error_of;
 
 namespace {
-
-std::string error_of(const std::string& json) {
-    try {
-        parse_scene(json, "test.json");
-    } catch (const InvalidInput& e) {
-        return e.what();
-    }
-    return "";
-}
-
-bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 TEST(Scenes, EveryBuiltinLoadsBuildsAndSteps) {
     const std::vector<std::string> names = builtin_scene_names();
@@ -113,7 +105,7 @@ class BrokenScene : public ::testing::TestWithParam<BadFile> {};
 
 TEST_P(BrokenScene, GivesAClearError) {
     const BadFile& c = GetParam();
-    const std::string msg = error_of(c.json);
+    const std::string msg = scene_error_of(c.json);
     ASSERT_FALSE(msg.empty()) << c.name << " was accepted";
     EXPECT_TRUE(has(msg, "test.json")) << msg;
     EXPECT_TRUE(has(msg, c.expect)) << c.name << ": " << msg;
@@ -136,6 +128,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadFile{"bad_vec", R"({"physics": {"gravity": [0, -9.81]}})", "physics.gravity must be an array of 3"},
         BadFile{"nan_like", R"({"physics": {"drag": -1}})", "physics.drag"},
         BadFile{"dt_range", R"({"physics": {"dt": 5}})", "physics.dt"},
+        BadFile{"sewing_speed", R"({"physics": {"sewing_speed": 20}})", "physics.sewing_speed"},
         BadFile{"collider_type", R"({"colliders": [{"type": "cube"}]})", "colliders[0].type"},
         BadFile{"collider_missing_type", R"({"colliders": [{"radius": 1}]})", "colliders[0].type is required"},
         BadFile{"collider_radius", R"({"colliders": [{"type": "sphere", "radius": -1}]})", "colliders[0].radius"},
@@ -257,18 +250,18 @@ TEST(Scenes, OutlinePanelsSewnIntoABag) {
 TEST(Scenes, BrokenOutlinesGiveClearErrors) {
     // A bow tie's two lobes cancel (zero signed area): it is self-intersecting, not collinear.
     const std::string bow_tie = R"({"cloth": {"type": "outline", "outline": [[0,0],[1,1],[1,0],[0,1]]}})";
-    EXPECT_TRUE(has(error_of(bow_tie), "cloth.outline: outline is self-intersecting: edge 0 (vertices 0-1) meets edge 2"))
-        << error_of(bow_tie);
-    EXPECT_FALSE(has(error_of(bow_tie), "collinear")) << error_of(bow_tie);
+    EXPECT_TRUE(has(scene_error_of(bow_tie), "cloth.outline: outline is self-intersecting: edge 0 (vertices 0-1) meets edge 2"))
+        << scene_error_of(bow_tie);
+    EXPECT_FALSE(has(scene_error_of(bow_tie), "collinear")) << scene_error_of(bow_tie);
     const std::string line = R"({"cloth": {"type": "outline", "outline": [[0,0],[1,0],[2,0]]}})";
-    EXPECT_TRUE(has(error_of(line), "collinear")) << error_of(line);
+    EXPECT_TRUE(has(scene_error_of(line), "collinear")) << scene_error_of(line);
     const std::string two = R"({"cloth": {"type": "outline", "outline": [[0,0],[1,1]]}})";
-    EXPECT_TRUE(has(error_of(two), "3 to 4096")) << error_of(two);
+    EXPECT_TRUE(has(scene_error_of(two), "3 to 4096")) << scene_error_of(two);
     const std::string sew = R"({"cloth": {"type": "outline", "outline": [[0,0],[1,0],[0,1]], "copy": {"sew": [[0, 7]]}}})";
-    EXPECT_TRUE(has(error_of(sew), "cloth.copy.sew[0]")) << error_of(sew);
+    EXPECT_TRUE(has(scene_error_of(sew), "cloth.copy.sew[0]")) << scene_error_of(sew);
     const std::string huge = R"({"cloth": {"type": "outline", "outline": [[0,0],[100,0],[0,100]], "spacing": 0.001}})";
-    EXPECT_TRUE(has(error_of(huge), "test.json: cloth.spacing = 0.001 m gives this outline up to")) << error_of(huge);
-    EXPECT_TRUE(has(error_of(huge), "at most 4000000")) << error_of(huge);
+    EXPECT_TRUE(has(scene_error_of(huge), "test.json: cloth.spacing = 0.001 m gives this outline up to")) << scene_error_of(huge);
+    EXPECT_TRUE(has(scene_error_of(huge), "at most 4000000")) << scene_error_of(huge);
     // Too thin for its spacing: found only when triangulating (build_scene), still naming the file and the fields.
     const SceneSpec thin =
         parse_scene(R"({"cloth": {"type": "outline", "outline": [[0,0],[1,0],[1,1e-9]], "spacing": 0.3}})", "thin.json");
@@ -283,7 +276,7 @@ TEST(Scenes, BrokenOutlinesGiveClearErrors) {
 
 TEST(Scenes, FourHundredDigitIntegerIsARangeError) {
     const std::string text = "{\"cloth\": {\"n\": 1" + std::string(400, '0') + "}}";
-    const std::string msg = error_of(text);
+    const std::string msg = scene_error_of(text);
     EXPECT_TRUE(has(msg, "test.json: cloth.n = 1000000000")) << msg;
     EXPECT_TRUE(has(msg, "... is not a finite number; allowed range [2, 4096]")) << msg;
 }
@@ -294,7 +287,7 @@ TEST(Scenes, OnlyInvalidInputEscapesTheParser) {
                            "{\"cloth\": {\"n\": -9223372036854775809}}", "\xff\xfe", "{\"scene\": \"\\ud800\"}",
                            "{\"cloth\": {\"type\": \"outline\", \"outline\": [[0,0],[1,0],[0,1]], \"copy\": {\"sew\": [[0, 1e400]]}}}"};
     for (const char* c : cases) {
-        const std::string msg = error_of(c);
+        const std::string msg = scene_error_of(c);
         EXPECT_TRUE(has(msg, "test.json: ")) << "'" << c << "': " << msg;
     }
 }
@@ -307,15 +300,15 @@ TEST(Scenes, MessagesStayOneShortLine) {
     for (const std::string& text : {deep, long_key, std::string("{\"cloth\": {\"a\\nb\": 1}}"),
                                     std::string("{\"cloth\": {\"pins\": \"x\\u000dy\"}}"),
                                     std::string("{\"cloth\": {\"n\": 10\n\n  \"size\": 1}}")}) {
-        const std::string msg = error_of(text);
+        const std::string msg = scene_error_of(text);
         EXPECT_TRUE(has(msg, "test.json: ")) << msg;
         EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
         EXPECT_EQ(msg.find('\r'), std::string::npos) << msg;
         EXPECT_LT(msg.size(), 1000u) << msg.substr(0, 300);
     }
-    EXPECT_TRUE(has(error_of("{\"cloth\": {\"a\\nb\": 1}}"), "cloth.a\\u000ab is not a known field"))
-        << error_of("{\"cloth\": {\"a\\nb\": 1}}");
-    EXPECT_TRUE(has(error_of(deep), "malformed JSON (near cloth[0][0][0]")) << error_of(deep);
+    EXPECT_TRUE(has(scene_error_of("{\"cloth\": {\"a\\nb\": 1}}"), "cloth.a\\u000ab is not a known field"))
+        << scene_error_of("{\"cloth\": {\"a\\nb\": 1}}");
+    EXPECT_TRUE(has(scene_error_of(deep), "malformed JSON (near cloth[0][0][0]")) << scene_error_of(deep);
 }
 
 // The scene path is checked before it is opened: a FIFO would block the open forever, a directory "opens".

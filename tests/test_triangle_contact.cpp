@@ -132,6 +132,10 @@ struct DropCase {
     std::uint32_t n;
     Solver solver;
 };
+// Printed by gtest (and in the ctest name): without it the bytes, padding included, would be printed.
+void PrintTo(const DropCase& dc, std::ostream* os) {
+    *os << "n = " << dc.n << (dc.solver == Solver::implicit ? ", implicit" : ", explicit");
+}
 
 class TriangleContactDrop : public ::testing::TestWithParam<DropCase> {};
 

@@ -44,10 +44,12 @@ Health Simulation::health() const {
         if (!(speed[b] <= h.max_speed)) h.max_speed = speed[b];
     }
     float max_strain = 0.0f, max_stretch = 0.0f;
-    for (const Edge& e : cloth_.edges) {
+    for (std::size_t k = 0; k < cloth_.edges.size(); ++k) {
+        const Edge& e = cloth_.edges[k];
         if (e.kind == SpringKind::bend) continue;
+        const float rest = edge_rest_.empty() ? e.rest : edge_rest_[k]; // a seam being sewn: its current rest
         const float dx = s.x[e.b] - s.x[e.a], dy = s.y[e.b] - s.y[e.a], dz = s.z[e.b] - s.z[e.a];
-        const float signed_strain = (std::sqrt(dx * dx + dy * dy + dz * dz) - e.rest) / e.rest;
+        const float signed_strain = (std::sqrt(dx * dx + dy * dy + dz * dz) - rest) / rest;
         if (!(signed_strain <= max_stretch)) max_stretch = signed_strain;
         if (e.kind != SpringKind::structural) continue;
         const float strain = std::fabs(signed_strain);

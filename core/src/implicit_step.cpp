@@ -74,6 +74,7 @@ void Simulation::cook_implicit() {
     if (implicit_) return;
     auto solver = std::make_unique<ImplicitSolver>();
     solver->fine.cook(cloth_);
+    if (!edge_rest_.empty()) solver->fine.set_spring_rest(edge_rest_); // seams being sewn (sewing.cpp)
     // Coarse levels: a square grid cloth that can rebuild its fabric on coarser grids.
     if (cloth_.coarsen && cloth_.grid && cloth_.grid->columns == cloth_.grid->rows && cloth_.grid->columns >= 2 * coarsest_side) {
         solver->columns = solver->rows = cloth_.grid->columns;
@@ -114,7 +115,8 @@ template <bool Parallel> void Simulation::multilevel_guess() {
     StateBuffer& b = buffers_[1 - current_];
     const std::uint32_t fc = is.columns, fr = is.rows;
     const float h = params_.dt, h2 = h * h;
-    const float gx = params_.gravity[0], gy = params_.gravity[1], gz = params_.gravity[2];
+    const std::array<float, 3> g = gravity_now();
+    const float gx = g[0], gy = g[1], gz = g[2];
     const double t = static_cast<double>(steps_done_) * static_cast<double>(h);
     const bool wind = params_.wind.enabled;
     const float wind_x = params_.wind.strength * static_cast<float>(std::sin(10.0 * t));
@@ -206,7 +208,8 @@ template <bool Parallel> void Simulation::implicit_step() {
     const bool aero = params_.aero.enabled;
 
     // 1. Prediction and initial guess. Buffer B still holds the state one step back: its velocity is v^{n-1}.
-    const float gx = params_.gravity[0], gy = params_.gravity[1], gz = params_.gravity[2];
+    const std::array<float, 3> g = gravity_now();
+    const float gx = g[0], gy = g[1], gz = g[2];
     const float g2 = gx * gx + gy * gy + gz * gz;
     const double t = static_cast<double>(steps_done_) * static_cast<double>(h);
     const bool wind = params_.wind.enabled;

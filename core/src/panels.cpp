@@ -251,8 +251,16 @@ MaskPanelBuild add_mask_panel(GarmentAssembly& io, const MaskPanel& mask, float 
             if (present < 3) continue;
             const std::size_t before = io.triangles.size();
             if (present == 4) {
-                push_tri(a, b, d); // (b-a) x (d-a) = u x v
-                push_tri(b, e, d);
+                // Diagonals mirrored about the mask's centre column, so a mask symmetric left-right gives a
+                // mesh symmetric left-right (a garment on a symmetric body settles symmetric): b-d left of the
+                // centre, a-e right of it (a cell straddling the centre of an even-width mask takes b-d).
+                if (2 * c + 1 <= static_cast<std::int64_t>(cols) - 1) {
+                    push_tri(a, b, d); // (b-a) x (d-a) = u x v
+                    push_tri(b, e, d);
+                } else {
+                    push_tri(a, b, e);
+                    push_tri(a, e, d);
+                }
             } else if (a < 0) {
                 push_tri(b, e, d);
             } else if (b < 0) {

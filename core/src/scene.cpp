@@ -777,6 +777,15 @@ SceneState read_state(ObjectReader& st) {
                     "must be a particle index in [0, " + std::to_string(out.x.size()) + ")");
         out.pinned.push_back(v.get<std::uint32_t>());
     }
+    if (const json* sewn = st.array("seam_rest", max_particles))
+        for (std::size_t k = 0; k < sewn->size(); ++k) {
+            const json& v = (*sewn)[k];
+            const double d = v.is_number() ? v.get<double>() : std::nan("");
+            if (!(d > 0.0 && d <= 100.0))
+                st.fail(st.at("seam_rest") + "[" + std::to_string(k) + "]",
+                        "must be a seam's rest length in (0, 100] m (a seam being sewn)");
+            out.seam_rest.push_back(static_cast<float>(d));
+        }
     st.finish();
     return out;
 }
@@ -958,6 +967,7 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
     SimulationParams& p = s.physics;
     p.gravity = ph.vec3("gravity", 100.0, " m/s^2", p.gravity);
     p.air_drag = static_cast<float>(ph.number("drag", 0.0, 100.0, " 1/s", p.air_drag));
+    p.sewing_speed = static_cast<float>(ph.number("sewing_speed", 0.0, 10.0, " m/s (0 = off)", p.sewing_speed));
     p.integrator = ph.text("integrator", {"euler", "verlet"}, "euler") == "verlet" ? Integrator::verlet
                                                                                  : Integrator::symplectic_euler;
     p.solver = ph.text("solver", {"explicit", "implicit"}, "explicit") == "implicit" ? Solver::implicit
@@ -1311,6 +1321,10 @@ void apply_state(const SceneState& st, BuiltScene& out) {
     out.initial.vx = st.vx;
     out.initial.vy = st.vy;
     out.initial.vz = st.vz;
+    if (!st.seam_rest.empty() && st.seam_rest.size() != c.seams.a.size())
+        throw InvalidInput("state.seam_rest has " + std::to_string(st.seam_rest.size()) + " entries but the cloth has " +
+                           std::to_string(c.seams.a.size()) + " seams");
+    out.initial.seam_rest = st.seam_rest;
 }
 
 } // namespace

@@ -262,7 +262,13 @@ std::string state_json(const SceneState& st) {
         out += std::string(i ? "," : "") + "\n      [" + num(st.vx[i]) + ", " + num(st.vy[i]) + ", " + num(st.vz[i]) + "]";
     out += "\n    ],\n    \"pinned\": [";
     for (std::size_t k = 0; k < st.pinned.size(); ++k) out += (k ? ", " : "") + num(st.pinned[k]);
-    out += "]\n  }";
+    out += "]";
+    if (!st.seam_rest.empty()) {
+        out += ",\n    \"seam_rest\": [";
+        for (std::size_t k = 0; k < st.seam_rest.size(); ++k) out += (k ? ", " : "") + num(st.seam_rest[k]);
+        out += "]";
+    }
+    out += "\n  }";
     return out;
 }
 
@@ -283,6 +289,7 @@ std::string to_json(const SceneSpec& s, const SceneState* state, const std::file
         .add("integrator", str(p.integrator == Integrator::verlet ? "verlet" : "euler"))
         .add("solver", str(solver_name(p.solver)));
     if (s.dt) ph.add("dt", num(*s.dt));
+    if (p.sewing_speed > 0.0f) ph.add("sewing_speed", num(p.sewing_speed));
     Fields im;
     im.add("iterations", num(p.implicit.iterations)).add("tolerance", num(p.implicit.tolerance))
         .add("chebyshev_rho", num(p.implicit.chebyshev_rho))
@@ -364,6 +371,8 @@ SceneState capture_state(const Simulation& sim) {
         s.vz[i] = v[2];
         if (sim.is_pinned(i) && i != sim.grabbed()) s.pinned.push_back(static_cast<std::uint32_t>(i));
     }
+    const std::span<const float> sewn = sim.seams_being_sewn();
+    s.seam_rest.assign(sewn.begin(), sewn.end());
     return s;
 }
 

@@ -40,7 +40,7 @@ template <bool Parallel> void Simulation::seam_forces_stage() {
                 dvz *= inv_dt;
             }
             const float k_s = m.stiffness * s.scale[k], kd_s = m.damping * s.scale[k];
-            const float c = k_s * (1.0f - s.rest[k] * inv) + kd_s * (dvx * dx + dvy * dy + dvz * dz) * inv * inv;
+            const float c = k_s * (1.0f - seam_rest_[k] * inv) + kd_s * (dvx * dx + dvy * dy + dvz * dz) * inv * inv;
             fx[a] += c * dx;
             fy[a] += c * dy;
             fz[a] += c * dz;

@@ -66,6 +66,8 @@ void validate_params(const SimulationParams& p) {
     for (int k = 0; k < 3; ++k)
         check(std::isfinite(p.aero.velocity[k]) && std::fabs(p.aero.velocity[k]) <= 100.0f,
               "aero velocity[" + std::to_string(k) + "]", p.aero.velocity[k], "[-100, 100] m/s");
+    check(std::isfinite(p.sewing_speed) && p.sewing_speed >= 0.0f && p.sewing_speed <= 10.0f, "sewing speed",
+          p.sewing_speed, "[0, 10] m/s (0 = off)");
     check(p.strain_limit.every >= 1 && p.strain_limit.every <= 1000, "strain limit interval", p.strain_limit.every,
           "[1, 1000] substeps");
     if (p.solver == Solver::implicit) {
@@ -125,6 +127,7 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
     for (AlignedArray<float>* a : {&extra_fx_, &extra_fy_, &extra_fz_}) a->reset(padded);
     inv_mass_authored_.assign(cloth_.inv_mass.begin(), cloth_.inv_mass.end());
     inv_mass_free_ = cloth_.free_inv_mass.size() == n ? cloth_.free_inv_mass : inv_mass_authored_;
+    cook_sewing(initial);
     if (params_.strain_limit.ratio > 0.0f) cook_strain_limit();
     if (params_.aero.enabled) cook_aero();
     if (!params_.colliders.empty()) cook_triangle_contact();

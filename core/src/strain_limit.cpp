@@ -163,7 +163,11 @@ void Simulation::cook_strain_limit() {
         const Edge& e = cloth_.edges[limit_groups_.edge_index[k]];
         limit_a_[k] = e.a;
         limit_b_[k] = e.b;
-        limit_rest_[k] = e.rest;
+        limit_rest_[k] = edge_rest_.empty() ? e.rest : edge_rest_[limit_groups_.edge_index[k]];
+        if (e.kind == SpringKind::seam) {
+            limit_seam_slot_.push_back(static_cast<std::uint32_t>(k));
+            limit_seam_edge_.push_back(limit_groups_.edge_index[k]);
+        }
     }
 }
 

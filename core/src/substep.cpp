@@ -106,9 +106,10 @@ kernels::StepContext Simulation::make_context(std::size_t step_index) {
     c.dt = params_.dt;
     c.dt2 = params_.dt * params_.dt;
     c.inv_dt = 1.0f / params_.dt;
-    c.gx = params_.gravity[0];
-    c.gy = params_.gravity[1];
-    c.gz = params_.gravity[2];
+    const std::array<float, 3> g = gravity_now();
+    c.gx = g[0];
+    c.gy = g[1];
+    c.gz = g[2];
     c.drag = params_.air_drag;
     // Time at the start of this substep, from the step count (no drift from summing dt).
     const double t = static_cast<double>(step_index) * static_cast<double>(params_.dt);
@@ -210,6 +211,7 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
     // An implicit step is a whole frame's worth of substeps: the monitor looks after every few.
     const std::size_t check_every = implicit ? 8 : HealthMonitor::check_every;
     for (std::size_t n = 0; n < count; ++n) {
+        if (sewing_) update_sewing();
         if (implicit)
             implicit_step<Parallel>();
         else

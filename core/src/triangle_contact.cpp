@@ -181,28 +181,6 @@ bool deepest(const Collider& col, float grow, V3 a, V3 b, V3 c, std::array<doubl
 
 } // namespace
 
-float clearance_bound(const Collider& col, Vec3f p) noexcept {
-    const float t = col.thickness;
-    const float dx = p[0] - col.centre[0], dy = p[1] - col.centre[1], dz = p[2] - col.centre[2];
-    switch (col.kind) {
-    case ColliderKind::plane:
-        return dx * col.axis[0] + dy * col.axis[1] + dz * col.axis[2] - t;
-    case ColliderKind::sphere:
-        return std::sqrt(dx * dx + dy * dy + dz * dz) - col.size[0] - t;
-    case ColliderKind::capsule:
-    case ColliderKind::disc:
-        return float(solid_distance(col, v3(p))) - t;
-    case ColliderKind::ellipsoid: {
-        const auto& R = col.rotation;
-        const float A[3] = {col.size[0] + t, col.size[1] + t, col.size[2] + t};
-        const float qx = (R[0] * dx + R[3] * dy + R[6] * dz) / A[0], qy = (R[1] * dx + R[4] * dy + R[7] * dz) / A[1],
-                    qz = (R[2] * dx + R[5] * dy + R[8] * dz) / A[2];
-        return std::min({A[0], A[1], A[2]}) * (std::sqrt(qx * qx + qy * qy + qz * qz) - 1.0f);
-    }
-    }
-    return 0.0f;
-}
-
 float enclosing_radius2(Vec3f a, Vec3f b, Vec3f c) noexcept {
     auto d2 = [](const Vec3f& p, const Vec3f& q) {
         return (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
@@ -241,7 +219,7 @@ float core_measure(const Collider& col, Vec3f p) noexcept {
         return qx * qx + qy * qy + qz * qz;
     }
     case ColliderKind::disc:
-        return clearance_bound(col, p);
+        return float(solid_distance(col, v3(p))) - t; // the exact signed distance to the inflated disc
     }
     return 0.0f;
 }
@@ -254,10 +232,8 @@ float clearance_from_measure(const Collider& col, float m) noexcept {
     case ColliderKind::sphere:
     case ColliderKind::capsule:
         return std::sqrt(m) - (col.size[0] + t);
-    case ColliderKind::ellipsoid:
-        return std::min({col.size[0], col.size[1], col.size[2]}) + t > 0.0f
-                   ? (std::min({col.size[0], col.size[1], col.size[2]}) + t) * (std::sqrt(m) - 1.0f)
-                   : 0.0f;
+    case ColliderKind::ellipsoid: // scaling by 1 / A stretches no distance by more than 1 / min A
+        return (std::min({col.size[0], col.size[1], col.size[2]}) + t) * (std::sqrt(m) - 1.0f);
     case ColliderKind::disc:
         return m;
     }

@@ -163,6 +163,14 @@ void Solver::refresh_materials(const Cloth& cloth) {
     }
 }
 
+void Solver::set_spring_rest(std::span<const float> edge_rest) {
+    for (std::size_t e = 0; e < graph_.spring_edge.size(); ++e) graph_.spring_rest[e] = edge_rest[graph_.spring_edge[e]];
+    if (!slices_) return;
+    VbdSlices& sl = *slices_;
+    for (std::size_t k = 0; k < sl.spring_edge.size(); ++k)
+        if (sl.spring_edge[k] != UINT32_MAX) sl.spring_rest[k] = edge_rest[sl.spring_edge[k]];
+}
+
 void Solver::cook(const Cloth& cloth) {
     graph_ = vbd::cook(cloth);
     static_assert(vbd_chunk % simd::width == 0, "a chunk is whole slices");

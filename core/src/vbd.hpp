@@ -53,6 +53,8 @@ class Solver {
     void cook(const Cloth& cloth);
     /// Refreshes the springs' k and kd from the cloth's materials (after Simulation::set_material).
     void refresh_materials(const Cloth& cloth);
+    /// Sets every spring's rest length from `edge_rest` (per Cloth::edges entry; seams being sewn change theirs).
+    void set_spring_rest(std::span<const float> edge_rest);
     /// Gauss-Seidel sweeps run simd::width vertices of a colour at once (vbd_batch.hpp; default) or one by one with
     /// solve_vertex (the scalar reference; the same bits).
     void set_simd(bool on) noexcept { simd_ = on; }

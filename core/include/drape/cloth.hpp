@@ -109,6 +109,9 @@ struct Cloth {
 struct InitialState {
     std::vector<float> x, y, z;    ///< positions relative to Cloth::origin, m
     std::vector<float> vx, vy, vz; ///< velocities, m/s
+    /// Seams still being sewn (SimulationParams::sewing_speed): each seam's current rest length, in SeamSet order,
+    /// m; empty = the seams start from their lengths in x, y, z (a saved state carries it, so sewing resumes).
+    std::vector<float> seam_rest;
 };
 
 /// Rounds n up to whole SIMD batches.

@@ -108,8 +108,10 @@ void check_mask(const MaskPanel& mask);
 ///         corner);
 ///   bend (r,c)-(r,c+2), (r,c)-(r+2,c) - only where the middle particle is present (no springs across a gap).
 /// For a full W x H rectangle that is H(W-1) + W(H-1) structural, 2(W-1)(H-1) shear and H(W-2) + W(H-2) bend
-/// springs (BENCH.md with W = H = N). Triangles: a cell with all four corners gives two (diagonal
-/// (r,c+1)-(r+1,c), like the hang scene); a cell with three corners gives the one triangle of those three.
+/// springs (BENCH.md with W = H = N). Triangles: a cell with all four corners gives two, split along a diagonal
+/// mirrored about the mask's centre column - (r,c+1)-(r+1,c) (the hang scene's) left of it, (r,c)-(r+1,c+1) right of
+/// it - so a mask symmetric left-right gives a mesh symmetric left-right; a cell with three corners gives the one
+/// triangle of those three.
 /// Throws InvalidInput.
 MaskPanelBuild add_mask_panel(GarmentAssembly& io_assembly, const MaskPanel& mask, float spacing,
                               float particle_mass, const PanelFrame& frame = {});
@@ -137,8 +139,8 @@ struct TShirtParams {
     /// 0.22 m) by 2 cm on each side, so the shirt starts outside the body and its seams close it.
     float gap = 0.26f;
     /// Rest length of a seam spring as a fraction of the grid spacing (0.01..2; cook_cloth refuses 0). The
-    /// seams start `gap` long and pull the panels together to this length: a closed seam leaves a 0.5 h wide
-    /// fold.
+    /// seams start `gap` long and pull the panels together to this length: a closed seam leaves a gap this wide
+    /// (0.5 h here; the built-in scene uses 0.05 h and sews the seams shut at SimulationParams::sewing_speed).
     float seam_rest_ratio = 0.5f;
 };
 

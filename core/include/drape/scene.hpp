@@ -96,6 +96,9 @@ struct SceneState {
     std::array<double, 3> origin{0.0, 0.0, 0.0};
     std::vector<float> x, y, z, vx, vy, vz;
     std::vector<std::uint32_t> pinned;
+    /// Seams being sewn when the state was saved: their current rest lengths, m (InitialState::seam_rest); empty
+    /// when no seam is still closing.
+    std::vector<float> seam_rest;
 };
 
 /// Everything a scene file holds (cold tier). Defaults are those of "hang".

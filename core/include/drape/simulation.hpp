@@ -102,6 +102,14 @@ struct SimulationParams {
     KernelPath kernel = KernelPath::automatic;
     bool fused = true; ///< false runs each stage as its own pass (reference / per-stage profiling)
     StrainLimit strain_limit;
+    /// Sewing, m/s (0..10; 0 = off): seams (SpringKind::seam) that start longer than their rest length are pulled
+    /// shut at this speed instead of all at once. A seam's rest length starts at its length in the initial state
+    /// and shrinks by sewing_speed x dt each step to its own rest length (Edge::rest); seam forces, strain limiting, the
+    /// implicit solver and the health figures all use that current rest length. While a seam is still closing the
+    /// cloth feels no gravity: the garment is sewn where it was placed (around a body), then dropped onto it. Off,
+    /// a seam 26 cm open snaps shut in one substep (its spring, or strain limiting, pulls the edges together at
+    /// once), which flings the panels.
+    float sewing_speed = 0.0f;
     /// Analytic colliders, positions relative to Cloth::origin; applied in order after strain limiting.
     std::vector<Collider> colliders;
     SelfCollision self_collision; ///< off by default (thickness 0)
@@ -154,6 +162,10 @@ class Simulation {
     KernelPath kernel() const noexcept { return kernel_; }
     std::size_t steps_done() const noexcept { return steps_done_; }
     double time() const noexcept { return static_cast<double>(steps_done_) * params_.dt; }
+    /// Seams' current rest lengths (SeamSet order) while any is still being sewn; empty once all are closed.
+    std::span<const float> seams_being_sewn() const noexcept {
+        return sewing_ ? std::span<const float>(seam_rest_) : std::span<const float>();
+    }
 
     /// The frame's origin (world coordinates, m): positions, colliders and grab targets are relative to it
     /// (Cloth::origin).
@@ -254,6 +266,18 @@ class Simulation {
     std::vector<std::uint32_t> limit_a_, limit_b_;
     std::vector<float> limit_rest_;
     void cook_strain_limit();
+    // Sewing (SimulationParams::sewing_speed, sewing.cpp): per seam, in SeamSet order, its current rest length; per
+    // edge, the current rest length (Edge::rest except seams being sewn). Empty without seams. update_sewing() runs
+    // before each substep or implicit step while a seam is still longer than its rest.
+    std::vector<float> seam_rest_, edge_rest_;
+    std::vector<std::uint32_t> limit_seam_slot_, limit_seam_edge_; ///< seams in limit_rest_: slot, edge index
+    bool sewing_ = false;
+    /// Gravity as the step feels it: none while seams are being sewn (the garment is sewn in place, then dropped).
+    std::array<float, 3> gravity_now() const noexcept {
+        return sewing_ ? std::array<float, 3>{0.0f, 0.0f, 0.0f} : params_.gravity;
+    }
+    void cook_sewing(const InitialState& initial);
+    void update_sewing();
     /// Runs strain limiting on `out` when it is due this substep (returns false when not); with `with_collide`, the
     /// collide stage runs after every sweep (limit and collide interleaved, collide last).
     template <bool Parallel> bool strain_limit_stage(StateBuffer& out, bool with_collide);

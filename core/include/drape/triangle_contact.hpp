@@ -44,22 +44,18 @@ struct TriangleContact {
 /// collider must be valid (check_collider). A plane collider never reports a triangle contact (its vertices decide).
 TriangleContact triangle_contact(const Collider& collider, Vec3f a, Vec3f b, Vec3f c) noexcept;
 
-/// A lower bound on the distance from p to the collider's inflated solid (m; <= 0 inside it), cheap enough for every
-/// particle: the exact signed distance for plane, sphere, capsule and disc; for an ellipsoid with inflated semi-axes
-/// A, min A * (sqrt(sum (q_i / A_i)^2) - 1) (scaling by 1 / A stretches no distance by more than 1 / min A). The
-/// distance is 1-Lipschitz, so no point of a triangle whose vertex has bound c is within c - (longest edge) of the
-/// solid: the triangle pass rejects most triangles with it before any search.
-float clearance_bound(const Collider& collider, Vec3f p) noexcept;
-
 /// Squared radius of the smallest ball holding triangle (a, b, c): (longest edge / 2)^2 for a right or obtuse
 /// triangle, else the circumradius squared.
 float enclosing_radius2(Vec3f a, Vec3f b, Vec3f c) noexcept;
 
 /// What triangle_clear_of needs of one vertex, computed once per particle and collider: the squared distance to the
 /// core (sphere: the centre; capsule: the axis segment), the squared level sum (q_i / A_i)^2 (ellipsoid), or
-/// clearance_bound (disc; plane: unused).
+/// the signed distance to the inflated solid (disc; plane: unused).
 float core_measure(const Collider& collider, Vec3f p) noexcept;
-/// clearance_bound from a core_measure.
+/// A lower bound on the distance from a point with this core_measure to the collider's inflated solid (m; <= 0 inside
+/// it): exact for sphere, capsule and disc; for an ellipsoid with inflated semi-axes A, min A (sqrt(measure) - 1). The
+/// distance is 1-Lipschitz, so no point of a triangle whose vertex has bound c is within c - (longest edge) of the
+/// solid: the triangle pass rejects most triangles with it before any search.
 float clearance_from_measure(const Collider& collider, float measure) noexcept;
 
 /// True when a triangle whose vertices have core measures m0, m1, m2 and which lies inside a ball of squared radius

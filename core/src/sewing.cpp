@@ -1,0 +1,68 @@
+// Sewing (SimulationParams::sewing_speed): seams that start open are pulled shut at a set speed. Each seam's rest
+// length starts at its length in the initial state (or a saved state's InitialState::seam_rest) and shrinks by
+// speed x dt every step to its own rest length (Edge::rest):  l0_k <- max(rest_k, l0_k - speed dt).
+// The seam spring then pulls only by what the cloth lags behind the schedule, so the panels are drawn together
+// smoothly instead of snapping shut in one substep. Every consumer of a seam's rest length reads the current one:
+// seam_forces (seam_rest_), strain limiting (its copy, limit_rest_), the implicit solver (vbd::Solver::set_spring_rest)
+// and the health figures (edge_rest_). Serial, while a seam is still closing (nothing after): O(seams) per explicit
+// substep; an implicit step also refreshes the solver's rest copies whole (O(springs), small beside its sweeps).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "drape/errors.hpp"
+#include "drape/simulation.hpp"
+#include "implicit_solver.hpp"
+
+namespace drape {
+
+void Simulation::cook_sewing(const InitialState& initial) {
+    const SeamSet& s = cloth_.seams;
+    if (s.empty()) return;
+    if (!initial.seam_rest.empty() && initial.seam_rest.size() != s.a.size())
+        throw InvalidInput("initial state seam_rest has " + std::to_string(initial.seam_rest.size()) +
+                           " entries, expected one per seam (" + std::to_string(s.a.size()) + ")");
+    seam_rest_ = s.rest;
+    const bool sew = params_.sewing_speed > 0.0f;
+    for (std::size_t k = 0; k < s.a.size() && sew; ++k) {
+        float start = 0.0f;
+        if (!initial.seam_rest.empty()) {
+            start = initial.seam_rest[k]; // a saved state: sewing resumes where it was
+            if (!(std::isfinite(start) && start > 0.0f))
+                throw InvalidInput("initial state seam_rest[" + std::to_string(k) + "] is " + std::to_string(start) +
+                                   " (must be a finite length > 0 m)");
+        } else {
+            const double dx = double(initial.x[s.b[k]]) - initial.x[s.a[k]],
+                         dy = double(initial.y[s.b[k]]) - initial.y[s.a[k]],
+                         dz = double(initial.z[s.b[k]]) - initial.z[s.a[k]];
+            start = static_cast<float>(std::sqrt(dx * dx + dy * dy + dz * dz));
+        }
+        seam_rest_[k] = std::max(s.rest[k], start);
+        sewing_ = sewing_ || seam_rest_[k] > s.rest[k];
+    }
+    edge_rest_.resize(cloth_.edges.size());
+    for (std::size_t e = 0; e < cloth_.edges.size(); ++e) edge_rest_[e] = cloth_.edges[e].rest;
+    for (std::size_t k = 0; k < s.a.size(); ++k) edge_rest_[s.groups.edge_index[k]] = seam_rest_[k];
+}
+
+void Simulation::update_sewing() {
+    if (!sewing_) return;
+    // One step of the schedule, in float: the same arithmetic whether the run was saved and resumed or not.
+    const SeamSet& s = cloth_.seams;
+    // Sewing switched off mid-run (set_params): the seams go to their rest length at once, as unsewn seams do.
+    const float closing = params_.sewing_speed > 0.0f ? params_.sewing_speed * params_.dt
+                                                      : std::numeric_limits<float>::infinity();
+    bool open = false;
+    for (std::size_t k = 0; k < s.a.size(); ++k) {
+        const float rest = std::max(s.rest[k], seam_rest_[k] - closing);
+        open = open || rest > s.rest[k];
+        seam_rest_[k] = rest;
+        edge_rest_[s.groups.edge_index[k]] = rest;
+    }
+    for (std::size_t k = 0; k < limit_seam_slot_.size(); ++k)
+        limit_rest_[limit_seam_slot_[k]] = edge_rest_[limit_seam_edge_[k]];
+    if (implicit_) implicit_->fine.set_spring_rest(edge_rest_);
+    sewing_ = open;
+}
+
+} // namespace drape

@@ -1,0 +1,265 @@
+// The T-shirt sewn shut and mirror-symmetric (issue 9 item 3): seams close to the cloth thickness, nothing inside the
+// body, the settled shirt the mirror image of itself within the thickness.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include "drape/colliders.hpp"
+#include "drape/panels.hpp"
+#include "drape/scene.hpp"
+#include "drape/simulation.hpp"
+#include "drape/triangle_contact.hpp"
+#include "drape/errors.hpp"
+
+using namespace drape;
+
+namespace {
+
+struct ShirtFigures {
+    std::size_t worst = 0;      ///< particle of the largest mirror error
+    double longest_seam = 0.0;  ///< m
+    double mirror_error = 0.0;  ///< m, max over particles of |p_i - mirror(p_mirror(i))|
+    std::size_t inside = 0;     ///< particles inside a body collider
+    bool finite = false;
+};
+
+// The particle that is the mirror image (x -> -x) of each particle: column c <-> 2m - c of the same panel.
+std::vector<std::uint32_t> mirror_map(const TShirtParams& p) {
+    const TShirtBuild t = build_tshirt(p);
+    std::vector<std::uint32_t> map(t.assembly.particle_count());
+    for (const MaskPanelBuild* panel : {&t.front, &t.back})
+        for (std::int64_t r = 0; r < panel->rows; ++r)
+            for (std::int64_t c = 0; c < panel->columns; ++c) {
+                const std::int32_t i = panel->particle_at(r, c);
+                if (i < 0) continue;
+                const std::int32_t j = panel->particle_at(r, panel->columns - 1 - c);
+                EXPECT_GE(j, 0);
+                map[static_cast<std::size_t>(i)] = static_cast<std::uint32_t>(j);
+            }
+    return map;
+}
+
+ShirtFigures measure(const Simulation& sim, const std::vector<std::uint32_t>& mirror) {
+    ShirtFigures f;
+    f.finite = sim.health().finite;
+    const auto x = sim.x(), y = sim.y(), z = sim.z();
+    const std::array<double, 3> o = sim.cloth().origin;
+    const SeamSet& s = sim.cloth().seams;
+    for (std::size_t k = 0; k < s.a.size(); ++k) {
+        const double dx = x[s.b[k]] - x[s.a[k]], dy = y[s.b[k]] - y[s.a[k]], dz = z[s.b[k]] - z[s.a[k]];
+        f.longest_seam = std::max(f.longest_seam, std::sqrt(dx * dx + dy * dy + dz * dz));
+    }
+    for (std::size_t i = 0; i < sim.cloth().particle_count; ++i) {
+        const std::size_t j = mirror[i];
+        const double dx = (x[i] + o[0]) + (x[j] + o[0]), dy = y[i] - y[j], dz = z[i] - z[j];
+        if (std::sqrt(dx * dx + dy * dy + dz * dz) > f.mirror_error) {
+            f.mirror_error = std::sqrt(dx * dx + dy * dy + dz * dz);
+            f.worst = i;
+        }
+        for (const Collider& c : sim.params().colliders)
+            if (c.kind != ColliderKind::plane && is_inside(c, {x[i], y[i], z[i]}, 1e-5f)) {
+                ++f.inside;
+                break;
+            }
+    }
+    return f;
+}
+
+// Fewest triangles of the cloth meeting any body collider (triangle_contact.hpp's exact test).
+std::size_t triangles_in_body(const Simulation& sim) {
+    const auto x = sim.x(), y = sim.y(), z = sim.z();
+    const std::vector<std::uint32_t>& tri = sim.cloth().triangles;
+    std::size_t count = 0;
+    for (std::size_t t = 0; t + 2 < tri.size(); t += 3) {
+        const Vec3f a{x[tri[t]], y[tri[t]], z[tri[t]]}, b{x[tri[t + 1]], y[tri[t + 1]], z[tri[t + 1]]},
+            c{x[tri[t + 2]], y[tri[t + 2]], z[tri[t + 2]]};
+        for (const Collider& col : sim.params().colliders)
+            if (col.kind != ColliderKind::plane && triangle_meets_collider(col, a, b, c)) {
+                ++count;
+                if (std::getenv("DRAPE_SHIRT_TRIS"))
+                    std::printf("tri %zu collider %d at %.3f %.3f %.3f\n", t / 3, int(&col - sim.params().colliders.data()),
+                                a[0] + sim.cloth().origin[0], a[1] + sim.cloth().origin[1], a[2] + sim.cloth().origin[2]);
+                break;
+            }
+    }
+    return count;
+}
+
+// The built-in T-shirt (the seed's 1,008 particles): sewn at 0.5 m/s with gravity held off until every seam is
+// closed, then dropped onto the body.
+TEST(TShirtSewn, ClosesEverySeamSymmetricallyOutsideTheBody) {
+    const SceneSpec spec = load_scene("tshirt");
+    ASSERT_GT(spec.physics.sewing_speed, 0.0f);
+    const std::vector<std::uint32_t> mirror = mirror_map(spec.tshirt);
+    BuiltScene b = build_scene(spec);
+    Simulation sim(std::move(b.cloth), b.initial, b.params);
+    const ShirtFigures start = measure(sim, mirror);
+    EXPECT_NEAR(start.longest_seam, 0.26, 1e-3) << "the panels start a gap apart";
+    EXPECT_LT(start.mirror_error, 1e-6);
+    sim.step(static_cast<std::size_t>(2.5 / sim.params().dt));
+    const ShirtFigures f = measure(sim, mirror);
+    ASSERT_TRUE(f.finite);
+    const float thickness = 0.005f; // the body's collision margin: the cloth's thickness against it
+    const float seam_rest = spec.tshirt.seam_rest_ratio / spec.tshirt.cells_per_metre;
+    EXPECT_LE(seam_rest, thickness);
+    EXPECT_LE(f.longest_seam, (1.0 + spec.physics.strain_limit.ratio) * seam_rest + 1e-5) << "a seam is open";
+    EXPECT_LE(f.mirror_error, thickness) << "particle " << f.worst << " is not the mirror image of its twin";
+    EXPECT_EQ(f.inside, 0u) << "particles inside the body";
+    EXPECT_EQ(triangles_in_body(sim), 0u) << "triangles through the body";
+    // It hangs from the shoulders: the top row (shoulder line, sleeve tops) rests on the shoulders and arms, above
+    // the armpits (y = 0.18), not below them.
+    float lowest_top = 1e9f;
+    const TShirtBuild t = build_tshirt(spec.tshirt);
+    for (const MaskPanelBuild* panel : {&t.front, &t.back})
+        for (std::int64_t c = 0; c < panel->columns; ++c)
+            if (const std::int32_t i = panel->particle_at(0, c); i >= 0)
+                lowest_top = std::min(lowest_top, float(sim.y()[std::size_t(i)] + sim.cloth().origin[1]));
+    EXPECT_GT(lowest_top, 0.18f) << "the shirt slid off the shoulders";
+}
+
+// Without sewing the seams snap shut in the first substep: strain limiting pulls the 26 cm seams to their rest
+// length at once, the panels' edges fly at tens of m/s. Sewing closes them at the set speed.
+TEST(TShirtSewn, SewingClosesTheSeamsGentlyWhereSnappingFlingsThePanels) {
+    auto fastest = [](float sewing_speed) {
+        SceneSpec spec = load_scene("tshirt");
+        spec.physics.sewing_speed = sewing_speed;
+        BuiltScene b = build_scene(spec);
+        Simulation sim(std::move(b.cloth), b.initial, b.params);
+        float v = 0.0f;
+        for (int k = 0; k < 20; ++k) {
+            sim.step(static_cast<std::size_t>(0.01 / sim.params().dt));
+            v = std::max(v, sim.health().max_speed);
+        }
+        return v;
+    };
+    const float snapped = fastest(0.0f), sewn = fastest(0.5f);
+    std::printf("fastest particle in the first 0.2 s: %.2f m/s snapped, %.2f m/s sewn at 0.5 m/s\n", snapped, sewn);
+    EXPECT_GT(snapped, 5.0f);
+    EXPECT_LT(sewn, 2.0f) << "sewing at 0.5 m/s moved a particle at " << sewn << " m/s";
+}
+
+// The schedule itself: a seam's current rest length is its start length minus speed x t, down to its rest; the
+// health figures measure a seam against it (a seam on schedule is not "stretched").
+TEST(TShirtSewn, SeamRestFollowsTheScheduleAndBadSpeedsAreRefused) {
+    SceneSpec spec = load_scene("tshirt");
+    spec.physics.strain_limit.ratio = 0.0f;
+    BuiltScene b = build_scene(spec);
+    Simulation sim(std::move(b.cloth), b.initial, b.params);
+    sim.step(static_cast<std::size_t>(0.2 / sim.params().dt));
+    // 0.2 s at 0.5 m/s: the 0.26 m seams have rest 0.16 m; the panels follow the schedule within a few mm.
+    const SeamSet& s = sim.cloth().seams;
+    for (std::size_t k = 0; k < s.a.size(); ++k) {
+        const float dx = sim.x()[s.b[k]] - sim.x()[s.a[k]], dy = sim.y()[s.b[k]] - sim.y()[s.a[k]],
+                    dz = sim.z()[s.b[k]] - sim.z()[s.a[k]];
+        EXPECT_NEAR(std::sqrt(dx * dx + dy * dy + dz * dz), 0.26 - 0.5 * sim.time(), 0.01) << "seam " << k;
+    }
+    EXPECT_LT(sim.health().max_limited_stretch, 0.1f);
+    EXPECT_FALSE(sim.seams_being_sewn().empty());
+    SimulationParams p = sim.params();
+    {   // Sewing switched off mid-run: the seams take their own rest length at the next step, gravity comes back.
+        SimulationParams off = p;
+        off.sewing_speed = 0.0f;
+        sim.set_params(off);
+        sim.step(1);
+        EXPECT_TRUE(sim.seams_being_sewn().empty());
+        sim.set_params(p);
+    }
+    for (float bad : {-0.1f, 10.5f, std::nanf("")}) {
+        p.sewing_speed = bad;
+        try {
+            sim.set_params(p);
+            ADD_FAILURE() << "sewing speed " << bad << " accepted";
+        } catch (const InvalidInput& e) {
+            EXPECT_NE(std::string(e.what()).find("sewing speed"), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("[0, 10] m/s"), std::string::npos) << e.what();
+        }
+    }
+}
+
+// Issue 9: "a grabbed T-shirt hem dragged 30 cm and released stays on the body". The front hem is dragged 0.28 m
+// forward and 0.1 m down over 0.5 s, then released. (With the strain limit at 10 % the knit could not give: the limit
+// fought the grab until the health monitor stopped the run at 101 % strain; jersey is limited at 30 % now.)
+TEST(TShirtSewn, HemDraggedThirtyCentimetresAndReleasedStaysOn) {
+    const SceneSpec spec = load_scene("tshirt");
+    BuiltScene b = build_scene(spec);
+    Simulation sim(std::move(b.cloth), b.initial, b.params);
+    const float dt = sim.params().dt;
+    sim.step(static_cast<std::size_t>(1.5 / dt));
+    const TShirtBuild t = build_tshirt(spec.tshirt);
+    struct TopRow {
+        float lowest = 1e9f, cuff = 1e9f; // lowest top-row particle (y), the cuff nearest the body (|x|)
+        std::size_t in_body = 0;
+    };
+    auto top_row = [&](const char* when) {
+        TopRow r;
+        for (const MaskPanelBuild* panel : {&t.front, &t.back})
+            for (std::int64_t c = 0; c < panel->columns; ++c)
+                if (const std::int32_t i = panel->particle_at(0, c); i >= 0) {
+                    r.lowest = std::min(r.lowest, float(sim.y()[std::size_t(i)] + sim.cloth().origin[1]));
+                    if (c == 0 || c == panel->columns - 1)
+                        r.cuff = std::min(r.cuff, std::fabs(float(sim.x()[std::size_t(i)] + sim.cloth().origin[0])));
+                }
+        r.in_body = triangles_in_body(sim);
+        std::printf("%s: lowest top-row particle y = %.3f m, the cuffs at |x| >= %.3f m, triangles in the body %zu\n",
+                    when, r.lowest, r.cuff, r.in_body);
+        return r;
+    };
+    const TopRow settled = top_row("settled");
+    const std::size_t hem = std::size_t(t.front.particle_at(t.front.rows - 1, t.front.columns / 2));
+    const std::array<float, 3> p0{sim.x()[hem], sim.y()[hem], sim.z()[hem]};
+    sim.grab(hem, p0);
+    const int moves = 50; // 0.5 s: 0.28 m forward and 0.1 m down, 0.30 m in all
+    for (int k = 1; k <= moves; ++k) {
+        const float s = float(k) / moves;
+        sim.move_grab({p0[0], p0[1] - 0.1f * s, p0[2] + 0.28f * s});
+        sim.step(static_cast<std::size_t>(0.01 / dt));
+    }
+    EXPECT_GT(sim.z()[hem], p0[2] + 0.25f) << "the hem was not dragged";
+    const TopRow dragged = top_row("dragged");
+    sim.release_grab();
+    sim.step(static_cast<std::size_t>(1.5 / dt));
+    const TopRow after = top_row("1.5 s after release");
+    ASSERT_TRUE(sim.health().finite);
+    for (const TopRow* r : {&settled, &dragged, &after}) {
+        EXPECT_GT(r->lowest, 0.18f) << "the shoulder line slid below the armpits";
+        EXPECT_GT(r->cuff, 0.38f) << "a sleeve rode up the arm";
+        EXPECT_EQ(r->in_body, 0u) << "triangles through the body";
+    }
+    EXPECT_LT(sim.z()[hem], p0[2] + 0.1f) << "the hem did not fall back";
+}
+
+TEST(TShirtSewn, DISABLED_Probe) {
+    const char* env = std::getenv("DRAPE_SHIRT_CPM");
+    SceneSpec spec = load_scene("tshirt");
+    if (env) spec.tshirt.cells_per_metre = float(std::atof(env));
+    if (std::getenv("DRAPE_SHIRT_NOLIMIT")) spec.physics.strain_limit.ratio = 0.0f;
+    if (const char* r = std::getenv("DRAPE_SHIRT_LIMIT")) spec.physics.strain_limit.ratio = float(std::atof(r));
+    if (const char* r = std::getenv("DRAPE_SHIRT_SEAM")) spec.tshirt.seam_rest_ratio = float(std::atof(r));
+    if (const char* v = std::getenv("DRAPE_SHIRT_SEW")) spec.physics.sewing_speed = float(std::atof(v));
+    if (std::getenv("DRAPE_SHIRT_IMPLICIT")) spec.physics.solver = Solver::implicit;
+    const std::vector<std::uint32_t> mirror = mirror_map(spec.tshirt);
+    BuiltScene b = build_scene(spec);
+    Simulation sim(std::move(b.cloth), b.initial, b.params);
+    std::printf("particles %zu dt %g\n", sim.cloth().particle_count, double(sim.params().dt));
+    {
+        const ShirtFigures f = measure(sim, mirror);
+        std::printf("t 0 seam %.4f mirror %.4f inside %zu\n", f.longest_seam, f.mirror_error, f.inside);
+    }
+    if (std::getenv("DRAPE_SHIRT_EARLY"))
+        for (std::size_t n : {1, 1, 1, 7, 10, 30, 50, 100, 300}) {
+            sim.step(n);
+            const ShirtFigures f = measure(sim, mirror);
+            std::printf("substep+%zu seam %.4f mirror %.3g\n", n, f.longest_seam, f.mirror_error);
+        }
+    const double seconds = std::getenv("DRAPE_SHIRT_T") ? std::atof(std::getenv("DRAPE_SHIRT_T")) : 3.0;
+    for (int k = 0; k < 12; ++k) {
+        sim.step(static_cast<std::size_t>(seconds / 12 / sim.params().dt));
+        const ShirtFigures f = measure(sim, mirror);
+        std::printf("t %.3f seam %.4f mirror %.3g at %zu (%.3f %.3f %.3f) inside %zu finite %d\n", (k + 1) * seconds / 12, f.longest_seam,
+                    f.mirror_error, f.worst, sim.x()[f.worst] + sim.cloth().origin[0], sim.y()[f.worst] + sim.cloth().origin[1], sim.z()[f.worst] + sim.cloth().origin[2], f.inside, int(f.finite));
+    }
+}
+
+} // namespace
