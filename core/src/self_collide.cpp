@@ -109,26 +109,62 @@ void Simulation::cook_self_collision() {
     sc_acc_.assign(6 * n, 0);
     sc_hits_.assign(n, 0);
     sc_block_extremes_.assign(2 * ((edges + sc_block - 1) / sc_block), 0.0f);
+    for (std::vector<float>* a : {&sc_snap_x_, &sc_snap_y_, &sc_snap_z_}) a->assign(n, 0.0f);
+    sc_block_moved_.assign((n + sc_block - 1) / sc_block, 0.0f);
+    sc_snap_step_ = SIZE_MAX;
 }
 
 template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out) {
     if (sc_acc_.empty()) cook_self_collision(); // not expected: construction and set_params cook
     if (sc_acc_.empty()) return;                // no triangles
+    const std::size_t n = cloth_.particle_count;
+    const float h = params_.self_collision.thickness;
+    // steps_done_ has not been advanced for this step yet: the snapshot is of this trajectory when it was taken at or
+    // before the end of the previous step (the health monitor's restore moves steps_done_ back before it).
+    const bool snapshot = sc_snap_step_ != SIZE_MAX && sc_snap_step_ <= steps_done_;
+    if (snapshot) {
+        // The largest move of any particle since the snapshot (per block, then the largest of those: exact in any
+        // order). Below a quarter of the thickness no two particles can have crossed a gap of half of it, and every
+        // pair closer than that was pushed to the thickness at the snapshot: nothing to do.
+        const float *x = out.x.data(), *y = out.y.data(), *z = out.z.data();
+        const float *sx = sc_snap_x_.data(), *sy = sc_snap_y_.data(), *sz = sc_snap_z_.data();
+        float* moved = sc_block_moved_.data();
+        for_blocks<Parallel>(n, [&](std::size_t begin, std::size_t end) {
+            float m = 0.0f;
+            for (std::size_t i = begin; i < end; ++i) {
+                const float dx = x[i] - sx[i], dy = y[i] - sy[i], dz = z[i] - sz[i];
+                m = std::max(m, dx * dx + dy * dy + dz * dz);
+            }
+            moved[begin / sc_block] = m;
+        });
+        const float most = *std::max_element(sc_block_moved_.begin(), sc_block_moved_.end());
+        if (most <= 0.0625f * h * h) return;
+    }
+    // Each pair's side: from the snapshot, or (none yet) from the start of this step.
     const StateBuffer& start = buffers_[current_];
+    const float* x0 = snapshot ? sc_snap_x_.data() : start.x.data();
+    const float* y0 = snapshot ? sc_snap_y_.data() : start.y.data();
+    const float* z0 = snapshot ? sc_snap_z_.data() : start.z.data();
     std::size_t total = 0;
     for (int round = 0; round < self_collide_rounds; ++round) {
         bool deep = false;
-        const std::size_t found = self_collide_round<Parallel>(out, start, deep);
+        const std::size_t found = self_collide_round<Parallel>(out, x0, y0, z0, deep);
         if (round == 0) sc_contacts_ = found;
         total += found;
         if (!deep) break; // another round only when a pair was pushed by more than half the thickness
     }
     // A push may have moved a particle into a collider: the collide stage's particle pass has the last word.
     if (total > 0 && !params_.colliders.empty()) collide_stage<Parallel>(out, true, 0);
+    std::copy_n(out.x.data(), n, sc_snap_x_.data());
+    std::copy_n(out.y.data(), n, sc_snap_y_.data());
+    std::copy_n(out.z.data(), n, sc_snap_z_.data());
+    sc_snap_step_ = steps_done_ + 1;
+    ++sc_runs_;
 }
 
 template <bool Parallel>
-std::size_t Simulation::self_collide_round(StateBuffer& out, const StateBuffer& start, bool& deep) {
+std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, const float* y0, const float* z0,
+                                           bool& deep) {
     const std::size_t n = cloth_.particle_count, tris = cloth_.triangles.size() / 3, edges = sc_edges_.size() / 2;
     const float h = params_.self_collision.thickness;
     const double hd = h, mu = params_.self_collision.friction;
@@ -138,7 +174,6 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const StateBuffer& 
     const std::uint32_t* edge = sc_edges_.data();
     const float* w = cloth_.inv_mass.data();
     float *x = out.x.data(), *y = out.y.data(), *z = out.z.data();
-    const float *x0 = start.x.data(), *y0 = start.y.data(), *z0 = start.z.data();
 
     // Cell size: the longest edge now; the shortest decides whether 1-ring neighbours are exempt (per-block extremes,
     // then the extremes of those: exact whatever the order).

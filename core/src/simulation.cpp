@@ -195,6 +195,7 @@ void Simulation::set_params(const SimulationParams& params) {
     if (params_.aero.enabled) cook_aero();
     if (!params_.colliders.empty()) cook_triangle_contact();
     if (params_.self_collision.thickness > 0.0f) cook_self_collision();
+    else sc_snap_step_ = SIZE_MAX; // off: the next time it is on, sides come from the start of that step again
     if (params_.solver == Solver::implicit) cook_implicit();
     monitor_.init(cloth_, params_);
     rebaseline_ = true;

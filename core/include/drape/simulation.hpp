@@ -209,9 +209,12 @@ class Simulation {
 
     /// Figures of the last implicit step (iterations, residual); zeros before the first.
     const ImplicitStats& implicit_stats() const noexcept { return implicit_stats_; }
-    /// Self-collision contacts applied in the first round of the last step: point-triangle and edge-edge pairs closer
+    /// Self-collision contacts applied in the first round of the stage's last run: point-triangle and edge-edge pairs closer
     /// than the thickness, less those already held at it (within 1%) and not approaching; 0 when self-collision is off.
     std::size_t self_contacts() const noexcept { return sc_contacts_; }
+    /// Steps in which the self-collision stage ran since construction (it skips a step in which no particle has moved
+    /// a quarter of the thickness since its last run).
+    std::size_t self_collision_runs() const noexcept { return sc_runs_; }
     /// The implicit solver's cooked data of the cloth itself (empty until the implicit solver is first chosen).
     const VbdGraph& vbd_graph() const noexcept;
 
@@ -305,7 +308,8 @@ class Simulation {
     // cooking, at most 8 cells per primitive), and per particle fixed-point accumulators of the pushes (integer sums
     // are exact, so the result does not depend on the order in which threads add).
     template <bool Parallel> void self_collide_stage(StateBuffer& out);
-    template <bool Parallel> std::size_t self_collide_round(StateBuffer& out, const StateBuffer& start, bool& deep);
+    template <bool Parallel>
+    std::size_t self_collide_round(StateBuffer& out, const float* x0, const float* y0, const float* z0, bool& deep);
     void cook_self_collision();
     std::vector<std::uint32_t> sc_edges_;            ///< 2 per edge, a < b
     std::vector<std::uint32_t> sc_tri_count_, sc_tri_start_, sc_tri_items_;   ///< bucket counts, starts, triangles
@@ -314,7 +318,13 @@ class Simulation {
     std::vector<std::int64_t> sc_acc_;  ///< per particle: dx, dy, dz, dvx, dvy, dvz (fixed point)
     std::vector<std::uint32_t> sc_hits_; ///< per particle: contacts that pushed it
     std::vector<float> sc_block_extremes_;    ///< per block of edges: the longest and shortest edge, squared
-    std::size_t sc_contacts_ = 0;        ///< contacts applied in the last step's first round (self_contacts)
+    std::size_t sc_contacts_ = 0;        ///< contacts applied in the last run's first round (self_contacts)
+    // The snapshot of the last run (positions after its pushes, and the step it ended): the stage runs again only once
+    // some particle has moved more than a quarter of the thickness from it, and takes each pair's side from it.
+    std::vector<float> sc_snap_x_, sc_snap_y_, sc_snap_z_;
+    std::vector<float> sc_block_moved_; ///< per block of particles: the largest squared move from the snapshot
+    std::size_t sc_snap_step_ = SIZE_MAX; ///< steps_done_ after the step the snapshot was taken in (SIZE_MAX: none)
+    std::size_t sc_runs_ = 0;             ///< steps in which the stage ran (self_collision_runs)
     template <bool Parallel> void seam_forces_stage();
     template <bool Parallel> void aero_forces_stage();
     void cook_aero();
