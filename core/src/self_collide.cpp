@@ -91,6 +91,19 @@ void Simulation::cook_self_collision() {
         }
     std::sort(keys.begin(), keys.end());
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    // Particles joined by seams (a seam pulls them together: they are one point of the garment, not a contact):
+    // union-find to the lowest index of each joined set.
+    sc_sewn_.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) sc_sewn_[i] = i;
+    auto root = [&](std::uint32_t i) {
+        while (sc_sewn_[i] != i) i = sc_sewn_[i] = sc_sewn_[sc_sewn_[i]];
+        return i;
+    };
+    for (std::size_t k = 0; k < cloth_.seams.a.size(); ++k) {
+        const std::uint32_t ra = root(cloth_.seams.a[k]), rb = root(cloth_.seams.b[k]);
+        if (ra != rb) sc_sewn_[std::max(ra, rb)] = std::min(ra, rb);
+    }
+    for (std::uint32_t i = 0; i < n; ++i) sc_sewn_[i] = root(i);
     sc_edges_.resize(2 * keys.size());
     for (std::size_t e = 0; e < keys.size(); ++e) {
         sc_edges_[2 * e] = std::uint32_t(keys[e] >> 32);
@@ -269,15 +282,20 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
     build(sc_tri_count_, sc_tri_start_, sc_tri_items_, tri_box, tris);
     build(sc_edge_count_, sc_edge_start_, sc_edge_items_, edge_box, edges);
 
-    // 1-ring neighbours (or the same particle): u shares a triangle with v.
-    auto near = [&](std::uint32_t u, std::uint32_t v) {
-        if (u == v) return true;
-        if (!ring_exempt) return false;
+    // The same point of the garment (the same particle, or particles sewn together), or 1-ring neighbours across
+    // that: a triangle of u holds v or a particle sewn to v (or the other way round).
+    const std::uint32_t* sewn = sc_sewn_.data();
+    auto ring = [&](std::uint32_t u, std::uint32_t v) {
         for (std::uint32_t k = vertex_tri_offsets_[u]; k < vertex_tri_offsets_[u + 1]; ++k) {
-            const std::uint32_t t = vertex_tris_[k];
-            if (tri[3 * t] == v || tri[3 * t + 1] == v || tri[3 * t + 2] == v) return true;
+            const std::uint32_t* t = tri + 3 * vertex_tris_[k];
+            if (sewn[t[0]] == sewn[v] || sewn[t[1]] == sewn[v] || sewn[t[2]] == sewn[v]) return true;
         }
         return false;
+    };
+    auto near = [&](std::uint32_t u, std::uint32_t v) {
+        if (sewn[u] == sewn[v]) return true;
+        if (!ring_exempt) return false;
+        return ring(u, v) || ring(v, u);
     };
     auto pos = [&](std::uint32_t i) { return V3{x[i], y[i], z[i]}; };
     auto pos0 = [&](std::uint32_t i) { return V3{x0[i], y0[i], z0[i]}; };

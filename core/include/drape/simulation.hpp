@@ -312,6 +312,7 @@ class Simulation {
     std::size_t self_collide_round(StateBuffer& out, const float* x0, const float* y0, const float* z0, bool& deep);
     void cook_self_collision();
     std::vector<std::uint32_t> sc_edges_;            ///< 2 per edge, a < b
+    std::vector<std::uint32_t> sc_sewn_; ///< per particle: the lowest particle sewn to it through seams (itself if none)
     std::vector<std::uint32_t> sc_tri_count_, sc_tri_start_, sc_tri_items_;   ///< bucket counts, starts, triangles
     std::vector<std::uint32_t> sc_edge_count_, sc_edge_start_, sc_edge_items_; ///< the same for edges
     std::vector<float> sc_tri_box_, sc_edge_box_; ///< per triangle / edge: its grown box (lo xyz, hi xyz)
