@@ -1188,6 +1188,13 @@ void ViewSession::set_strain_limit(const StrainLimit& limit) {
     commit_params(p, "strain limit");
 }
 
+void ViewSession::set_self_collision(float thickness) {
+    SimulationParams p = sim_->params();
+    p.self_collision.thickness =
+        thickness > 0.0f ? std::clamp(thickness, self_collision_min_thickness, self_collision_max_thickness) : 0.0f;
+    commit_params(p, "self-collision");
+}
+
 bool ViewSession::apply_dt(double dt) {
     if (params_.solver == Solver::implicit) { // any step in the slider's range
         SimulationParams p = sim_->params();

@@ -283,6 +283,8 @@ class ViewSession {
     void note_frame_sim_ms(double ms);
     /// Provot strain limiting (ratio 0 = off); ranges as in drape/simulation.hpp.
     void set_strain_limit(const StrainLimit& limit);
+    /// Self-collision thickness, m (0 = off, else self_collision_min_thickness to _max_thickness; the friction stays).
+    void set_self_collision(float thickness);
     /// Fixes dt (s) within (0, bound]; the panel cannot offer more than the bound.
     void set_dt(double dt);
     void set_auto_dt(bool on);

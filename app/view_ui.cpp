@@ -308,6 +308,21 @@ void Viewer::ui_physics() {
     if (limit_changed)
         s.set_strain_limit({limit_on ? limit_ratio : 0.0f, p.strain_limit.passes,
                             static_cast<std::uint32_t>(std::max(limit_every, 1))});
+    bool self_on = p.self_collision.thickness > 0.0f;
+    float self_mm = self_on ? 1e3f * p.self_collision.thickness : 4.0f;
+    bool self_changed = ImGui::Checkbox("self-collision", &self_on);
+    ImGui::SameLine();
+    ImGui::PushItemWidth(112.0f);
+    self_changed |= edit_float("##self", self_mm, 1e3f * self_collision_min_thickness,
+                               1e3f * self_collision_max_thickness, "%.1f mm", log_flags, self_mm);
+    ImGui::PopItemWidth();
+    help_marker("Cloth against cloth (docs/self_collision.md): points and edges closer than this thickness are pushed "
+                "apart, once something moved a quarter of it. Costly (tens of times an explicit substep); the "
+                "implicit solver's large steps can still pass through.");
+    if (self_changed) s.set_self_collision(self_on ? 1e-3f * self_mm : 0.0f);
+    if (self_on)
+        ImGui::TextDisabled("%s contacts at its last run, ran in %s steps", grouped(s.sim().self_contacts()).c_str(),
+                            grouped(s.sim().self_collision_runs()).c_str());
     float dt = 0.0f;
     const float bound = static_cast<float>(s.dt_bound());
     if (implicit) {

@@ -382,6 +382,27 @@ TEST(ViewSession, UndoAndRedoParameterChanges) {
     EXPECT_TRUE(s.sim().health().finite);
 }
 
+TEST(ViewSession, SelfCollisionFromThePhysicsPanel) {
+    ViewSession s(16, 1, std::nullopt);
+    EXPECT_EQ(s.sim().params().self_collision.thickness, 0.0f);
+    s.set_self_collision(0.004f);
+    s.end_edit();
+    EXPECT_EQ(s.params().self_collision.thickness, 0.004f);
+    EXPECT_EQ(s.sim().params().self_collision.thickness, 0.004f);
+    for (int k = 0; k < 5; ++k) s.advance();
+    EXPECT_GT(s.sim().self_collision_runs(), 0u) << "the stage runs (its first run has no snapshot to skip against)";
+    EXPECT_TRUE(s.sim().health().finite);
+    s.set_self_collision(1.0f); // beyond the range: the largest thickness
+    s.end_edit();
+    EXPECT_EQ(s.sim().params().self_collision.thickness, self_collision_max_thickness);
+    s.set_self_collision(0.0f);
+    s.end_edit();
+    EXPECT_EQ(s.sim().params().self_collision.thickness, 0.0f);
+    s.undo();
+    s.undo();
+    EXPECT_EQ(s.sim().params().self_collision.thickness, 0.004f);
+}
+
 TEST(ViewSession, OneDraggedSliderIsOneUndoEntryAndTheHistoryIsBounded) {
     ViewSession s(16, 1, std::nullopt);
     for (float k : {1200.0f, 1500.0f, 1800.0f, 2100.0f}) // one drag: no end_edit() between
