@@ -9,6 +9,22 @@
 
 namespace drape::testing {
 
+/// True in a build with AddressSanitizer (the CI's second run, 10-30 times slower than Release). The longest
+/// simulations run shorter there (fewer steps or particles, never fewer checks): the Release run checks their figures
+/// in full, and the ASan run looks for memory errors, which every code path shows in its first steps.
+inline constexpr bool sanitized =
+#if defined(__SANITIZE_ADDRESS__)
+    true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+    true;
+#else
+    false;
+#endif
+#else
+    false;
+#endif
+
 /// Hang scene of n x n with positions perturbed by up to `jitter` grid spacings and random velocities up to `speed`
 /// m/s (so springs are stretched, compressed and moving: every term of the force matters).
 inline SceneBuild perturbed_hang(std::uint32_t n, float jitter, float speed, unsigned seed, HangParams hp = {}) {

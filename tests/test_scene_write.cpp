@@ -191,11 +191,11 @@ TEST(SceneWrite, EveryScenesRoundTripsToTheSameSpecAndCloth) {
     const auto scenes = all_scenes();
     EXPECT_GE(scenes.size(), builtin_scene_names().size() + 1); // the examples too
     for (const auto& [name, spec] : scenes) {
-        const std::string text = scene_to_json(spec);
+        const std::string text = scene_to_json(spec, spec.state ? &*spec.state : nullptr); // pile.json has a state
         const SceneSpec back = parse_scene(text, name + " (written)");
         expect_same_spec(spec, back, name);
         expect_same_build(build_scene(spec), build_scene(back), name);
-        EXPECT_EQ(scene_to_json(back), text) << name << ": writing is a fixed point";
+        EXPECT_EQ(scene_to_json(back, back.state ? &*back.state : nullptr), text) << name << ": writing is a fixed point";
     }
 }
 
@@ -291,6 +291,8 @@ TEST(SceneWrite, SavedStateContinuesBitIdentically) {
         SceneSpec s = spec;
         // The analytic wind depends on the time, which restarts at 0 on load (documented): off here; aero stays.
         s.physics.wind.enabled = false;
+        // So does self-collision's schedule (its last run's snapshot is not saved, documented): off here.
+        s.physics.self_collision.thickness = 0.0f;
         expect_continues_identically(s, name, 150, 200);
     }
 }
