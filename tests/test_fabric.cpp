@@ -262,6 +262,23 @@ TEST(Fabric, GridSceneHandsTheFabricToTheBuilder) {
     EXPECT_TRUE(has(m, "cloth.pin_radius = 2 is outside the allowed range [0, 1] m")) << m;
 }
 
+// A fabric the grid cannot represent is refused when the cloth is built; the message names the file like every other
+// scene error (found by the fuzzer: it did not).
+TEST(Fabric, BuildErrorsNameTheSceneFile) {
+    const SceneSpec s = parse_scene(
+        grid_scene(R"({ "model": "fabric", "fabric": "jersey", "shear": 40, "stretch_u": 20, "stretch_v": 43 })"),
+        "soft.json");
+    try {
+        (void)build_scene(s);
+        ADD_FAILURE() << "a shear above both stretch stiffnesses was built";
+    } catch (const InvalidInput& e) {
+        const std::string m = e.what();
+        EXPECT_EQ(m.rfind("soft.json: ", 0), 0u) << m;
+        EXPECT_TRUE(has(m, "shear = 40")) << m;
+        EXPECT_EQ(m.find("soft.json", 1), std::string::npos) << "named once: " << m;
+    }
+}
+
 TEST(Fabric, RoundTripThroughTheWriter) {
     for (const std::string& material :
          {std::string(R"("denim")"), std::string(R"({ "fabric": "jersey", "stretch_v": 1234.5678 })"),

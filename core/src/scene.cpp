@@ -1329,7 +1329,8 @@ void apply_state(const SceneState& st, BuiltScene& out) {
 
 } // namespace
 
-BuiltScene build_scene(const SceneSpec& s) {
+namespace {
+BuiltScene build_scene_body(const SceneSpec& s) {
     BuiltScene out;
     if (s.cloth == ClothType::grid) {
         HangParams g = s.grid;
@@ -1448,6 +1449,20 @@ BuiltScene build_scene(const SceneSpec& s) {
                                                             : static_cast<float>(default_dt(out.cloth, out.params));
     if (s.state) apply_state(*s.state, out);
     return out;
+}
+} // namespace
+
+BuiltScene build_scene(const SceneSpec& s) {
+    // Every error names the scene: the build's own checks (the fabric's constants, a saved state's size) do not know
+    // the file (the fuzzer found "fabric.shear = 40 N/m is too large ..." without it).
+    const std::string name = s.source.empty() ? std::string("scene") : s.source;
+    try {
+        return build_scene_body(s);
+    } catch (const InvalidInput& e) {
+        const std::string message = e.what();
+        if (message.compare(0, name.size() + 2, name + ": ") == 0) throw;
+        throw InvalidInput(name + ": " + message);
+    }
 }
 
 } // namespace drape
