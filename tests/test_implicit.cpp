@@ -297,52 +297,72 @@ TEST(Implicit, ValidatesItsParameters) {
     EXPECT_NO_THROW(Simulation(scene.cloth, scene.initial, p));
 }
 
-// The SIMD sweeps (vbd_batch.hpp: a colour's vertices simd::width at a time) give the scalar reference's bits
-// (vbd::solve_vertex one vertex at a time): a grid with bending and damping in contact with a sphere, and a sewn
-// T-shirt (hinge bending, seams, the body's colliders).
+// The SIMD sweeps give the scalar reference's bits (vbd::solve_vertex one vertex at a time): on the gathered slices
+// (vbd_batch.hpp: a colour's vertices simd::width at a time) and, for a grid cloth, on its colour sub-grids
+// (vbd_grid.hpp: contiguous loads). Cases: a grid with bending and damping in contact with a sphere, the same grid in
+// the seeds' springs model (bend springs two apart, no bending rows), a 6 x 6 grid, and a sewn T-shirt (hinge
+// bending, seams, the body's colliders: no grid).
 TEST(Implicit, SimdSweepsMatchTheScalarReferenceBitForBit) {
-    auto compare = [](const Cloth& cloth, const InitialState& s, std::span<const Collider> colliders) {
+    auto compare = [](const Cloth& cloth, const InitialState& s, std::span<const Collider> colliders, bool grid_layout) {
         const std::size_t n = cloth.particle_count;
-        std::vector<float> out[2][3];
-        for (int simd = 0; simd < 2; ++simd) {
+        std::vector<float> out[3][3];
+        for (int mode = 0; mode < 3; ++mode) { // scalar, slices, grid layout (where the cloth has one)
             vbd::Solver solver;
             solver.cook(cloth);
-            solver.set_simd(simd == 1);
+            solver.set_simd(mode > 0);
+            solver.set_grid(mode == 2);
+            EXPECT_EQ(solver.grid_sweeps(), mode == 2 && grid_layout);
             const float h = 1.0f / 30.0f;
             for (std::size_t i = 0; i < n; ++i) {
                 solver.pred_x()[i] = s.x[i] + h * s.vx[i];
                 solver.pred_y()[i] = s.y[i] + h * s.vy[i] - h * h * 9.81f;
                 solver.pred_z()[i] = s.z[i] + h * s.vz[i];
             }
-            for (int k = 0; k < 3; ++k) out[simd][k] = {solver.pred_x(), solver.pred_x() + n};
-            out[simd][1].assign(solver.pred_y(), solver.pred_y() + n);
-            out[simd][2].assign(solver.pred_z(), solver.pred_z() + n);
+            out[mode][0].assign(solver.pred_x(), solver.pred_x() + n);
+            out[mode][1].assign(solver.pred_y(), solver.pred_y() + n);
+            out[mode][2].assign(solver.pred_z(), solver.pred_z() + n);
             ImplicitParams ip;
             ip.iterations = 6;
             ip.chebyshev_rho = 0.0f;
-            solver.run<false>({s.x.data(), s.y.data(), s.z.data(), out[simd][0].data(), out[simd][1].data(),
-                               out[simd][2].data(), cloth.inv_mass.data(), colliders},
+            solver.run<false>({s.x.data(), s.y.data(), s.z.data(), out[mode][0].data(), out[mode][1].data(),
+                               out[mode][2].data(), cloth.inv_mass.data(), colliders},
                               ip, h, 0.2f);
         }
-        std::size_t differ = 0, moved = 0;
-        for (std::size_t i = 0; i < n; ++i) {
-            for (int k = 0; k < 3; ++k) differ += std::memcmp(&out[0][k][i], &out[1][k][i], sizeof(float)) != 0;
-            moved += out[0][1][i] != s.y[i];
+        for (int mode = 1; mode < 3; ++mode) {
+            std::size_t differ = 0;
+            for (std::size_t i = 0; i < n; ++i)
+                for (int k = 0; k < 3; ++k) differ += std::memcmp(&out[0][k][i], &out[mode][k][i], sizeof(float)) != 0;
+            EXPECT_EQ(differ, 0u) << "mode " << mode;
         }
-        EXPECT_EQ(differ, 0u);
+        std::size_t moved = 0;
+        for (std::size_t i = 0; i < n; ++i) moved += out[0][1][i] != s.y[i];
         EXPECT_GT(moved, n / 2);
     };
-    HangParams hp = fabric_hang(37); // 1,369 particles: colours end in partial slices
+    auto shake = [](InitialState& s) {
+        for (std::size_t i = 0; i < s.x.size(); ++i) {
+            s.vx[i] = 0.3f * std::sin(float(i));
+            s.vy[i] = -0.5f;
+        }
+    };
+    const std::vector<Collider> sphere = {make_sphere({0.0f, -0.35f, 0.0f}, 0.35f, {0.004f, 0.5f})};
+    HangParams hp = fabric_hang(37); // 1,369 particles: colours end in partial batches
     hp.fabric.damping = 1e-3f;
     SceneBuild grid = build_hang_scene(hp);
-    for (std::size_t i = 0; i < grid.initial.x.size(); ++i) {
-        grid.initial.vx[i] = 0.3f * std::sin(float(i));
-        grid.initial.vy[i] = -0.5f;
-    }
-    const std::vector<Collider> sphere = {make_sphere({0.0f, -0.35f, 0.0f}, 0.35f, {0.004f, 0.5f})};
-    compare(grid.cloth, grid.initial, sphere);
+    shake(grid.initial);
+    compare(grid.cloth, grid.initial, sphere, true);
+    compare(grid.cloth, grid.initial, {}, true);
+    HangParams springs;
+    springs.n = 29;
+    springs.bend_ratio = 0.1f;
+    SceneBuild spring_grid = build_hang_scene(springs);
+    ASSERT_TRUE(spring_grid.cloth.bending.empty());
+    shake(spring_grid.initial);
+    compare(spring_grid.cloth, spring_grid.initial, sphere, true);
+    SceneBuild small = build_hang_scene(fabric_hang(6)); // the size of the multilevel solver's coarsest levels
+    shake(small.initial);
+    compare(small.cloth, small.initial, {}, true);
     SceneSpec shirt = load_scene("tshirt");
     shirt.tshirt.cells_per_metre = 30;
     BuiltScene b = build_scene(shirt);
-    compare(b.cloth, b.initial, b.params.colliders);
+    compare(b.cloth, b.initial, b.params.colliders, false);
 }

@@ -7,6 +7,7 @@
 
 #include "for_each_index.hpp"
 #include "vbd_batch.hpp"
+#include "vbd_grid.hpp"
 
 namespace drape::vbd {
 
@@ -18,6 +19,35 @@ void refresh_materials(VbdGraph& g, const Cloth& cloth) {
         g.spring_kd[e] = m.damping * edge.scale;
     }
 }
+
+namespace {
+
+VbdGraph finish_colouring(VbdGraph& g, const std::vector<std::uint32_t>& colour, std::uint32_t colours);
+
+/// P = 2 or 3 when the cloth is a full grid and no spring or bending entry joins two vertices of one class
+/// (row mod P, column mod P); 0 otherwise.
+std::uint32_t grid_period(const Cloth& cloth, const VbdGraph& g) {
+    const std::size_t n = g.particle_count;
+    if (!cloth.grid || std::size_t(cloth.grid->rows) * cloth.grid->columns != n) return 0;
+    const std::uint32_t columns = cloth.grid->columns;
+    for (std::uint32_t P : {2u, 3u}) {
+        auto same_class = [&](std::size_t i, std::uint32_t j) {
+            return (i / columns) % P == (j / columns) % P && (i % columns) % P == (j % columns) % P;
+        };
+        bool fits = true;
+        for (std::size_t i = 0; i < n && fits; ++i) {
+            for (std::uint32_t e = g.spring_offsets[i]; e < g.spring_offsets[i + 1] && fits; ++e)
+                fits = !same_class(i, g.spring_neighbour[e]);
+            if (!g.bend_offsets.empty())
+                for (std::uint32_t e = g.bend_offsets[i]; e < g.bend_offsets[i + 1] && fits; ++e)
+                    fits = !same_class(i, g.bend_neighbour[e]);
+        }
+        if (fits) return P;
+    }
+    return 0;
+}
+
+} // namespace
 
 VbdGraph cook(const Cloth& cloth) {
     const std::size_t n = cloth.particle_count;
@@ -77,9 +107,33 @@ VbdGraph cook(const Cloth& cloth) {
         g.bend_beta = bend.damping;
     }
 
-    // Greedy colouring in index order: each vertex takes the smallest colour none of its coupled neighbours
-    // (springs or bending) has yet.
+    // A full grid cloth none of whose couplings joins two vertices of one class (row mod P, column mod P), P = 2 or 3
+    // (grid_period): the colours are the classes, so that the sweeps can run on colour sub-grids (vbd_grid.hpp). Other cloths: greedy colouring in index order, each vertex taking the smallest colour none of
+    // its coupled neighbours (springs or bending) has yet.
     std::vector<std::uint32_t> colour(n, UINT32_MAX);
+    const std::uint32_t period = grid_period(cloth, g);
+    if (period != 0) {
+        const std::uint32_t columns = cloth.grid->columns;
+        std::vector<std::uint32_t> class_colour(period * period, UINT32_MAX);
+        for (std::uint32_t i = 0; i < n; ++i)
+            class_colour[((i / columns) % period) * period + (i % columns) % period] = 0;
+        // Colour order: the classes by diagonal, (column - row) mod P, then by row: (0,0) (1,1) (2,2) (0,1) (1,2) (2,0)
+        // (0,2) (1,0) (2,1) for P = 3. In row-major class order the 40 x 40 canvas of
+        // Implicit.LargeStepsOnStiffFabricStayFinite reached strain 0.80 at h = 0.1 s (8 iterations), 0.30 in this
+        // order, 0.39 with the greedy colouring.
+        std::vector<std::uint32_t> order(period * period);
+        std::iota(order.begin(), order.end(), 0u);
+        std::stable_sort(order.begin(), order.end(), [&](std::uint32_t l, std::uint32_t r) {
+            auto key = [&](std::uint32_t c) { return ((c % period) + period - c / period) % period; };
+            return key(l) < key(r);
+        });
+        std::uint32_t colours = 0;
+        for (std::uint32_t k : order)
+            if (class_colour[k] == 0) class_colour[k] = colours++;
+        for (std::uint32_t i = 0; i < n; ++i)
+            colour[i] = class_colour[((i / columns) % period) * period + (i % columns) % period];
+        return finish_colouring(g, colour, colours);
+    }
     std::vector<std::uint32_t> stamp; // stamp[c] == i + 1: colour c is taken by a neighbour of i
     std::uint32_t colours = 0;
     for (std::uint32_t i = 0; i < n; ++i) {
@@ -97,14 +151,23 @@ VbdGraph cook(const Cloth& cloth) {
         colour[i] = c;
         colours = std::max(colours, c + 1);
     }
+    return finish_colouring(g, colour, colours);
+}
+
+namespace {
+
+VbdGraph finish_colouring(VbdGraph& g, const std::vector<std::uint32_t>& colour, std::uint32_t colours) {
+    const std::size_t n = g.particle_count;
     g.colour_offsets.assign(colours + 1, 0);
     for (std::uint32_t c : colour) ++g.colour_offsets[c + 1];
     std::partial_sum(g.colour_offsets.begin(), g.colour_offsets.end(), g.colour_offsets.begin());
     g.colour_vertex.resize(n);
-    fill.assign(g.colour_offsets.begin(), g.colour_offsets.end() - 1);
+    std::vector<std::uint32_t> fill(g.colour_offsets.begin(), g.colour_offsets.end() - 1);
     for (std::uint32_t i = 0; i < n; ++i) g.colour_vertex[fill[colour[i]]++] = i;
-    return g;
+    return std::move(g);
 }
+
+} // namespace
 
 float contact_project(std::span<const Collider> colliders, const float p0[3], float p[3], float normal[3]) noexcept {
     float mu = -1.0f;
@@ -153,6 +216,7 @@ Solver& Solver::operator=(Solver&&) noexcept = default;
 
 void Solver::refresh_materials(const Cloth& cloth) {
     vbd::refresh_materials(graph_, cloth);
+    if (grid_) grid_->refresh(graph_);
     VbdSlices& sl = *slices_;
     for (std::size_t e = 0; e < sl.spring_edge.size(); ++e) {
         if (sl.spring_edge[e] == UINT32_MAX) continue;
@@ -165,6 +229,7 @@ void Solver::refresh_materials(const Cloth& cloth) {
 
 void Solver::set_spring_rest(std::span<const float> edge_rest) {
     for (std::size_t e = 0; e < graph_.spring_edge.size(); ++e) graph_.spring_rest[e] = edge_rest[graph_.spring_edge[e]];
+    if (grid_) grid_->refresh(graph_);
     if (!slices_) return;
     VbdSlices& sl = *slices_;
     for (std::size_t k = 0; k < sl.spring_edge.size(); ++k)
@@ -236,8 +301,10 @@ void Solver::cook(const Cloth& cloth) {
     fill_u(sl.bend_neighbour, bend_neighbour);
     fill_f(sl.bend_q, bend_q);
     const std::size_t n = cloth.particle_count;
-    for (std::vector<float>* a : {&pred_x_, &pred_y_, &pred_z_, &cheb1_x_, &cheb1_y_, &cheb1_z_, &cheb2_x_, &cheb2_y_,
-                                  &cheb2_z_, &jac_x_, &jac_y_, &jac_z_, &contact_nx_, &contact_ny_, &contact_nz_, &contact_mu_})
+    grid_ = cloth.grid ? GridLayout::cook(graph_, cloth.grid->rows, cloth.grid->columns) : nullptr;
+    const std::size_t state = std::max(n, grid_ ? grid_->cells() : 0);
+    for (std::vector<float>* a : {&cheb1_x_, &cheb1_y_, &cheb1_z_, &cheb2_x_, &cheb2_y_, &cheb2_z_}) a->assign(state, 0.0f);
+    for (std::vector<float>* a : {&pred_x_, &pred_y_, &pred_z_, &jac_x_, &jac_y_, &jac_z_, &contact_nx_, &contact_ny_, &contact_nz_, &contact_mu_})
         a->assign(n, 0.0f);
     colour_chunk_base_.assign(graph_.colour_count() + 1, 0);
     for (std::size_t c = 0; c < graph_.colour_count(); ++c) {
@@ -246,7 +313,8 @@ void Solver::cook(const Cloth& cloth) {
             colour_chunk_base_[c] + static_cast<std::uint32_t>((size + vbd_chunk - 1) / vbd_chunk);
     }
     const std::size_t jacobi_chunks = (n + vbd_chunk - 1) / vbd_chunk;
-    chunk_residual_.assign(std::max<std::size_t>(colour_chunk_base_.back(), jacobi_chunks), 0.0);
+    const std::size_t grid_chunks = grid_ ? grid_->colour_count() * grid_->chunks_per_colour() : 0;
+    chunk_residual_.assign(std::max({std::size_t(colour_chunk_base_.back()), jacobi_chunks, grid_chunks}), 0.0);
 }
 
 template <bool Parallel>
@@ -255,19 +323,33 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     const float inv_h = 1.0f / h;
     const float* inv_mass = st.inv_mass;
     float *x = st.x, *y = st.y, *z = st.z;
-    const SweepArgs args{st.x0,         st.y0,         st.z0, pred_x_.data(), pred_y_.data(), pred_z_.data(), x, y, z,
-                         inv_mass,      &graph_,       inv_h * inv_h, air_drag * inv_h, inv_h};
+    SweepArgs args{st.x0,    st.y0,   st.z0,         pred_x_.data(),   pred_y_.data(), pred_z_.data(), x, y, z,
+                   inv_mass, &graph_, inv_h * inv_h, air_drag * inv_h, inv_h};
     const bool jacobi = ip.method == ImplicitMethod::jacobi;
+    // A grid cloth's Gauss-Seidel sweeps run on its packed colour sub-grids (vbd_grid.hpp); the Chebyshev pass below
+    // is element by element, so it runs on whichever arrays hold the iterate (count of them, mass their masses).
+    const bool grid = !jacobi && grid_sweeps();
+    std::size_t count = n;
+    const float* mass = inv_mass;
+    if (grid) {
+        grid_->pack<Parallel>(st, pred_x_.data(), pred_y_.data(), pred_z_.data());
+        args = grid_->packed_args(args);
+        x = grid_->x();
+        y = grid_->y();
+        z = grid_->z();
+        count = grid_->cells();
+        mass = grid_->inv_mass();
+    }
     // Chebyshev's extrapolation and contact disagree (it throws points a collider holds back into the air: a cloth
     // resting on the ground bounced 3 cm, measured), so with colliders the sweeps run plain.
     const bool chebyshev = ip.chebyshev_rho > 0.0f && st.colliders.empty();
     const float rho2 = ip.chebyshev_rho * ip.chebyshev_rho;
-    const std::size_t blocks = (n + block_particles - 1) / block_particles;
+    const std::size_t blocks = (count + block_particles - 1) / block_particles;
     float omega = 1.0f;
     if (chebyshev) {
-        std::copy_n(x, n, cheb1_x_.data());
-        std::copy_n(y, n, cheb1_y_.data());
-        std::copy_n(z, n, cheb1_z_.data());
+        std::copy_n(x, count, cheb1_x_.data());
+        std::copy_n(y, count, cheb1_y_.data());
+        std::copy_n(z, count, cheb1_z_.data());
     }
     // Contact, vertex by vertex right after its local step (its neighbours then never see it inside a collider):
     // out of every collider from the side the step came from; the normal of the last contact is kept for friction.
@@ -303,7 +385,14 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     ImplicitStats stats;
     for (std::uint32_t it = 0; it < ip.iterations; ++it) {
         std::size_t chunks_used = 0;
-        if (!jacobi) {
+        if (grid) {
+            const std::size_t chunks = grid_->chunks_per_colour();
+            for (std::size_t c = 0; c < grid_->colour_count(); ++c)
+                for_each_index<Parallel>(chunks, [&](std::size_t ch) {
+                    chunk_residual_[c * chunks + ch] = grid_->solve_chunk(args, c, ch, contact, keep_out);
+                });
+            chunks_used = grid_->colour_count() * chunks;
+        } else if (!jacobi) {
             for (std::size_t c = 0; c < graph_.colour_count(); ++c) {
                 const std::uint32_t first = graph_.colour_offsets[c], last = graph_.colour_offsets[c + 1];
                 const std::uint32_t base = colour_chunk_base_[c];
@@ -381,10 +470,10 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
             omega = it == 0 ? 1.0f : it == 1 ? 2.0f / (2.0f - rho2) : 4.0f / (4.0f - rho2 * omega);
             const float w = omega;
             for_each_index<Parallel>(blocks, [&](std::size_t blk) {
-                const std::size_t begin = blk * block_particles, end = std::min(begin + block_particles, n);
+                const std::size_t begin = blk * block_particles, end = std::min(begin + block_particles, count);
                 for (std::size_t i = begin; i < end; ++i) {
                     float px = x[i], py = y[i], pz = z[i];
-                    if (it > 0 && inv_mass[i] != 0.0f) {
+                    if (it > 0 && mass[i] != 0.0f) {
                         px = w * (px - cheb2_x_[i]) + cheb2_x_[i];
                         py = w * (py - cheb2_y_[i]) + cheb2_y_[i];
                         pz = w * (pz - cheb2_z_[i]) + cheb2_z_[i];
@@ -403,6 +492,7 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
         }
         if (ip.tolerance > 0.0f && r <= double(ip.tolerance) * stats.first_residual) break;
     }
+    if (grid) grid_->unpack<Parallel>(st);
     stats.relative_residual = stats.first_residual > 0.0 ? stats.last_residual / stats.first_residual : 0.0;
     return stats;
 }

@@ -42,6 +42,7 @@ struct LevelState {
 float contact_project(std::span<const Collider> colliders, const float p0[3], float p[3], float normal[3]) noexcept;
 
 struct VbdSlices;
+class GridLayout;
 
 /// The sweeps of one cloth (one level of the multilevel solve, or the only one): its cooked graph and scratch.
 class Solver {
@@ -58,6 +59,11 @@ class Solver {
     /// Gauss-Seidel sweeps run simd::width vertices of a colour at once (vbd_batch.hpp; default) or one by one with
     /// solve_vertex (the scalar reference; the same bits).
     void set_simd(bool on) noexcept { simd_ = on; }
+    /// A grid cloth's Gauss-Seidel sweeps run on its colour sub-grids (vbd_grid.hpp: contiguous loads, no gathers;
+    /// default where the cloth fits the layout) or on the gathered slices (off; the same bits).
+    void set_grid(bool on) noexcept { grid_on_ = on; }
+    /// Whether the Gauss-Seidel sweeps run on the grid layout.
+    bool grid_sweeps() const noexcept { return grid_ != nullptr && grid_on_ && simd_; }
     bool cooked() const noexcept { return !graph_.colour_offsets.empty(); }
     VbdGraph& graph() noexcept { return graph_; }
     const VbdGraph& graph() const noexcept { return graph_; }
@@ -83,7 +89,8 @@ class Solver {
     std::vector<double> chunk_residual_;          ///< per fixed chunk of a sweep: sum of |g_i|^2
     std::vector<std::uint32_t> colour_chunk_base_; ///< per colour: its first chunk in chunk_residual_
     std::unique_ptr<VbdSlices> slices_;
-    bool simd_ = true;
+    std::unique_ptr<GridLayout> grid_;
+    bool simd_ = true, grid_on_ = true;
 };
 
 /// Everything one sweep reads: the state at the start of the step, the inertial prediction, the iterate.

@@ -25,42 +25,42 @@ struct VbdSlices {
     AlignedArray<float> bend_q;
 };
 
-/// The local step of the slice's lanes (all of them computed; the caller writes only the live, movable ones): new
-/// positions into out_x/y/z, |g|^2 into g2 (lanes of width floats).
-inline void solve_batch(const SweepArgs& a, const VbdSlices& sl, std::size_t slice, float* out_x, float* out_y,
-                        float* out_z, float* g2) noexcept {
+/// The local step of simd::width vertices at once, one per lane, from a source of their state and their springs and
+/// bending rows (slot by slot; padded slots add exactly nothing). Writes the new positions and |g|^2 per lane.
+/// Sources: SliceSource below (a colour's slice, neighbours gathered) and GridSource (vbd_grid.hpp: a grid cloth in
+/// colour sub-grids, neighbours loaded contiguously). The operations and their order are those of the scalar
+/// solve_vertex (vbd.hpp), so every source gives its bits.
+template <class Src>
+inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x, simd::fbatch& out_y,
+                        simd::fbatch& out_z, simd::fbatch& out_g2) noexcept {
     using simd::fbatch;
     using simd::fmask;
-    using simd::ibatch;
-    auto indices = [](const std::uint32_t* p) { return simd::load_indices(p); };
-    const VbdGraph& g = *a.graph;
     constexpr std::size_t W = simd::width;
-    const ibatch vi = indices(sl.vertex.data() + slice * W);
+    const VbdGraph& g = *a.graph;
     const fbatch zero(0.0f), one(1.0f);
-    const fbatch xi = simd::gather(a.x, vi), yi = simd::gather(a.y, vi), zi = simd::gather(a.z, vi);
-    const fbatch x0i = simd::gather(a.x0, vi), y0i = simd::gather(a.y0, vi), z0i = simd::gather(a.z0, vi);
+    const fbatch xi = src.own(a.x), yi = src.own(a.y), zi = src.own(a.z);
+    const fbatch x0i = src.own(a.x0), y0i = src.own(a.y0), z0i = src.own(a.z0);
     const fbatch dxi = xi - x0i, dyi = yi - y0i, dzi = zi - z0i;
-    fbatch w = simd::gather(a.inv_mass, vi);
+    fbatch w = src.own(a.inv_mass);
     w = simd::select(w == zero, one, w); // fixed lanes are not written: keep their arithmetic finite
     const fbatch m = one / w;
     const fbatch mi = m * fbatch(a.inv_h2), md = m * fbatch(a.drag_over_h);
-    fbatch gx = mi * (xi - simd::gather(a.px, vi)) + md * dxi;
-    fbatch gy = mi * (yi - simd::gather(a.py, vi)) + md * dyi;
-    fbatch gz = mi * (zi - simd::gather(a.pz, vi)) + md * dzi;
+    fbatch gx = mi * (xi - src.own(a.px)) + md * dxi;
+    fbatch gy = mi * (yi - src.own(a.py)) + md * dyi;
+    fbatch gz = mi * (zi - src.own(a.pz)) + md * dzi;
     fbatch hxx = mi + md, hyy = hxx, hzz = hxx, hxy = zero, hxz = zero, hyz = zero;
     fbatch qhxx = hxx, qhyy = hxx, qhzz = hxx, qhxy = zero, qhxz = zero, qhyz = zero;
     fbatch sgx = zero, sgy = zero, sgz = zero;
     const fbatch inv_h(a.inv_h), tiny(1e-24f);
-    const std::size_t sb = sl.spring_begin[slice], ss = sl.spring_slots[slice];
+    const std::size_t ss = src.springs();
     // The line search below reuses each spring's d = x_j - x_i and |d| (the same values it would recompute).
     constexpr std::size_t cached_slots = 16;
     alignas(64) float cache_dx[cached_slots][W], cache_dy[cached_slots][W], cache_dz[cached_slots][W],
         cache_l0[cached_slots][W];
     for (std::size_t s = 0; s < ss; ++s) {
-        const std::size_t at = sb + s * W;
-        const ibatch j = indices(sl.spring_neighbour.data() + at);
-        const fbatch k = simd::load(sl.spring_k.data() + at), l = simd::load(sl.spring_rest.data() + at);
-        const fbatch xj = simd::gather(a.x, j), yj = simd::gather(a.y, j), zj = simd::gather(a.z, j);
+        const fbatch k = src.spring_k(s), l = src.spring_rest(s);
+        fbatch xj, yj, zj;
+        src.spring_pos(s, a.x, a.y, a.z, xj, yj, zj);
         const fbatch dx = xj - xi, dy = yj - yi, dz = zj - zi;
         const fbatch len2 = dx * dx + dy * dy + dz * dz;
         if (s < cached_slots) {
@@ -88,14 +88,14 @@ inline void solve_batch(const SweepArgs& a, const VbdSlices& sl, std::size_t sli
         hxx = hxx + simd::select(at_rest, k, zero);
         hyy = hyy + simd::select(at_rest, k, zero);
         hzz = hzz + simd::select(at_rest, k, zero);
-        const fbatch kd = simd::load(sl.spring_kd.data() + at) * inv_h;
-        const fbatch nx = simd::gather(a.x0, j) - x0i, ny = simd::gather(a.y0, j) - y0i,
-                     nz = simd::gather(a.z0, j) - z0i;
+        const fbatch kd = src.spring_kd(s) * inv_h;
+        fbatch x0j, y0j, z0j;
+        src.spring_pos(s, a.x0, a.y0, a.z0, x0j, y0j, z0j);
+        const fbatch nx = x0j - x0i, ny = y0j - y0i, nz = z0j - z0i;
         const fbatch n2 = nx * nx + ny * ny + nz * nz;
         const fmask damped = (kd > zero) & (n2 > tiny);
         const fbatch inv_n2 = one / simd::select(damped, n2, one);
-        const fbatch ddx = (xj - simd::gather(a.x0, j)) - dxi, ddy = (yj - simd::gather(a.y0, j)) - dyi,
-                     ddz = (zj - simd::gather(a.z0, j)) - dzi;
+        const fbatch ddx = (xj - x0j) - dxi, ddy = (yj - y0j) - dyi, ddz = (zj - z0j) - dzi;
         const fbatch p = kd * (ddx * nx + ddy * ny + ddz * nz) * inv_n2;
         gx = gx - simd::select(damped, p * nx, zero);
         gy = gy - simd::select(damped, p * ny, zero);
@@ -111,20 +111,20 @@ inline void solve_batch(const SweepArgs& a, const VbdSlices& sl, std::size_t sli
     if (!g.bend_diag.empty()) {
         const fbatch bh = fbatch(g.bend_beta) * inv_h;
         fbatch bx = zero, by = zero, bz = zero;
-        const std::size_t bb = sl.bend_begin[slice], bs = sl.bend_slots[slice];
+        const std::size_t bs = src.bends();
         for (std::size_t s = 0; s < bs; ++s) {
-            const std::size_t at = bb + s * W;
-            const ibatch j = indices(sl.bend_neighbour.data() + at);
-            const fbatch q = simd::load(sl.bend_q.data() + at);
-            const fbatch xj = simd::gather(a.x, j), yj = simd::gather(a.y, j), zj = simd::gather(a.z, j);
-            bx = bx + q * ((xj - xi) + bh * ((xj - simd::gather(a.x0, j)) - dxi));
-            by = by + q * ((yj - yi) + bh * ((yj - simd::gather(a.y0, j)) - dyi));
-            bz = bz + q * ((zj - zi) + bh * ((zj - simd::gather(a.z0, j)) - dzi));
+            const fbatch q = src.bend_q(s);
+            fbatch xj, yj, zj, x0j, y0j, z0j;
+            src.bend_pos(s, a.x, a.y, a.z, xj, yj, zj);
+            src.bend_pos(s, a.x0, a.y0, a.z0, x0j, y0j, z0j);
+            bx = bx + q * ((xj - xi) + bh * ((xj - x0j) - dxi));
+            by = by + q * ((yj - yi) + bh * ((yj - y0j) - dyi));
+            bz = bz + q * ((zj - zi) + bh * ((zj - z0j) - dzi));
         }
         gx = gx + bx;
         gy = gy + by;
         gz = gz + bz;
-        const fbatch d = simd::gather(g.bend_diag.data(), vi) * (one + bh);
+        const fbatch d = src.bend_diag() * (one + bh);
         qhxx = qhxx + d;
         qhyy = qhyy + d;
         qhzz = qhzz + d;
@@ -151,7 +151,6 @@ inline void solve_batch(const SweepArgs& a, const VbdSlices& sl, std::size_t sli
                    qhxy * px * py + qhxz * px * pz + qhyz * py * pz;
         const fbatch p2 = px * px + py * py + pz * pz;
         for (std::size_t s = 0; s < ss; ++s) {
-            const std::size_t at = sb + s * W;
             fbatch dx, dy, dz, l0;
             if (s < cached_slots) {
                 dx = simd::load(cache_dx[s]);
@@ -159,18 +158,18 @@ inline void solve_batch(const SweepArgs& a, const VbdSlices& sl, std::size_t sli
                 dz = simd::load(cache_dz[s]);
                 l0 = simd::load(cache_l0[s]);
             } else {
-                const ibatch j = indices(sl.spring_neighbour.data() + at);
-                dx = simd::gather(a.x, j) - xi;
-                dy = simd::gather(a.y, j) - yi;
-                dz = simd::gather(a.z, j) - zi;
+                fbatch xj, yj, zj;
+                src.spring_pos(s, a.x, a.y, a.z, xj, yj, zj);
+                dx = xj - xi;
+                dy = yj - yi;
+                dz = zj - zi;
                 l0 = xsimd::sqrt(dx * dx + dy * dy + dz * dz);
             }
             const fbatch l1 = xsimd::sqrt((dx - px) * (dx - px) + (dy - py) * (dy - py) + (dz - pz) * (dz - pz));
             const fbatch sum = l0 + l1;
             const fmask live = sum > zero;
             const fbatch dl = (p2 - fbatch(2.0f) * (dx * px + dy * py + dz * pz)) / simd::select(live, sum, one);
-            const fbatch de = fbatch(0.5f) * simd::load(sl.spring_k.data() + at) * dl *
-                              (sum - fbatch(2.0f) * simd::load(sl.spring_rest.data() + at));
+            const fbatch de = fbatch(0.5f) * src.spring_k(s) * dl * (sum - fbatch(2.0f) * src.spring_rest(s));
             e = e + simd::select(live, de, zero);
         }
         return e;
@@ -189,10 +188,59 @@ inline void solve_batch(const SweepArgs& a, const VbdSlices& sl, std::size_t sli
             ddz = simd::select(searching, zero, ddz);
         }
     }
-    (xi + ddx).store_unaligned(out_x);
-    (yi + ddy).store_unaligned(out_y);
-    (zi + ddz).store_unaligned(out_z);
-    (gx * gx + gy * gy + gz * gz).store_unaligned(g2);
+    out_x = xi + ddx;
+    out_y = yi + ddy;
+    out_z = zi + ddz;
+    out_g2 = gx * gx + gy * gy + gz * gz;
+}
+
+
+/// A slice of a colour's vertices (VbdSlices): own state and neighbours gathered by index.
+struct SliceSource {
+    const VbdSlices& sl;
+    const VbdGraph& graph;
+    simd::ibatch vi;
+    std::size_t sb, ss, bb, bs;
+    SliceSource(const VbdSlices& slices, const VbdGraph& g, std::size_t slice) noexcept
+        : sl(slices), graph(g), vi(simd::load_indices(slices.vertex.data() + slice * simd::width)),
+          sb(slices.spring_begin[slice]), ss(slices.spring_slots[slice]), bb(slices.bend_begin[slice]),
+          bs(slices.bend_slots[slice]) {}
+    simd::fbatch own(const float* f) const noexcept { return simd::gather(f, vi); }
+    std::size_t springs() const noexcept { return ss; }
+    std::size_t bends() const noexcept { return bs; }
+    simd::fbatch spring_k(std::size_t s) const noexcept { return simd::load(sl.spring_k.data() + sb + s * simd::width); }
+    simd::fbatch spring_kd(std::size_t s) const noexcept { return simd::load(sl.spring_kd.data() + sb + s * simd::width); }
+    simd::fbatch spring_rest(std::size_t s) const noexcept {
+        return simd::load(sl.spring_rest.data() + sb + s * simd::width);
+    }
+    void spring_pos(std::size_t s, const float* x, const float* y, const float* z, simd::fbatch& ox, simd::fbatch& oy,
+                    simd::fbatch& oz) const noexcept {
+        const simd::ibatch j = simd::load_indices(sl.spring_neighbour.data() + sb + s * simd::width);
+        ox = simd::gather(x, j);
+        oy = simd::gather(y, j);
+        oz = simd::gather(z, j);
+    }
+    simd::fbatch bend_q(std::size_t s) const noexcept { return simd::load(sl.bend_q.data() + bb + s * simd::width); }
+    void bend_pos(std::size_t s, const float* x, const float* y, const float* z, simd::fbatch& ox, simd::fbatch& oy,
+                  simd::fbatch& oz) const noexcept {
+        const simd::ibatch j = simd::load_indices(sl.bend_neighbour.data() + bb + s * simd::width);
+        ox = simd::gather(x, j);
+        oy = simd::gather(y, j);
+        oz = simd::gather(z, j);
+    }
+    simd::fbatch bend_diag() const noexcept { return simd::gather(graph.bend_diag.data(), vi); }
+};
+
+/// The local step of the slice's lanes (all of them computed; the caller writes only the live, movable ones): new
+/// positions into out_x/y/z, |g|^2 into g2 (lanes of width floats).
+inline void solve_batch(const SweepArgs& a, const VbdSlices& sl, std::size_t slice, float* out_x, float* out_y,
+                        float* out_z, float* g2) noexcept {
+    simd::fbatch ox, oy, oz, og;
+    solve_lanes(SliceSource(sl, *a.graph, slice), a, ox, oy, oz, og);
+    ox.store_unaligned(out_x);
+    oy.store_unaligned(out_y);
+    oz.store_unaligned(out_z);
+    og.store_unaligned(g2);
 }
 
 } // namespace drape::vbd

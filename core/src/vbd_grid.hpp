@@ -1,0 +1,156 @@
+// Vertex block descent on a grid cloth without gathers: the vertices are rearranged by colour into sub-grids, so the
+// simd::width vertices of a colour that one batch solves sit side by side, and so do each of their neighbours in any
+// one direction. The sweeps then load everything contiguously (vbd_batch.hpp's solve_lanes with GridSource below),
+// with the same operations in the same order as the scalar solve_vertex: the same bits (tests/test_implicit.cpp).
+//
+// Layout. A grid cloth (index = row * columns + column) whose springs and bending rows reach at most two rows and two
+// columns, and whose greedy colouring (vbd.cpp) is the pattern (row mod P, column mod P) with P = 2 or 3, has P^2
+// classes (a, b). Class (a, b) holds the vertices (a + P p, b + P q) at sub-grid row p and column q. The neighbour of
+// (a + P p, b + P q) at (dr, dc) is in class ((a + dr) mod P, (b + dc) mod P) at (p + floor((a + dr) / P),
+// q + floor((b + dc) / P)), a shift of -1, 0 or +1: one constant index offset per class and direction ("delta").
+// Each class block is (sub_rows + 2) rows of `stride` floats, a row and 16 columns of zero halo round its cells; cells
+// outside the cloth hold zero mass (never written) and zero coefficients (they add exactly nothing).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "drape/aligned_array.hpp"
+#include "drape/simd.hpp"
+#include "vbd.hpp"
+#include "vbd_batch.hpp"
+
+namespace drape::vbd {
+
+class GridLayout {
+  public:
+    /// The layout of a grid cloth of rows x columns particles with this cooked graph, or null when the cloth does not
+    /// fit it (a spring or bending entry further than two rows or columns, a row out of direction order, a colouring
+    /// that is not the pattern): the sweeps then run on the gathered slices.
+    static std::unique_ptr<GridLayout> cook(const VbdGraph& graph, std::uint32_t rows, std::uint32_t columns);
+    /// Copies every spring's k, kd and rest length and the bending rows from the graph (after a material change or
+    /// while seams are sewn).
+    void refresh(const VbdGraph& graph);
+
+    std::size_t cells() const noexcept { return cells_; }
+    std::size_t colour_count() const noexcept { return colour_class_.size(); }
+    std::size_t chunks_per_colour() const noexcept { return chunks_; }
+    std::size_t spring_slots() const noexcept { return spring_dir_.size(); }
+    std::size_t bend_slots() const noexcept { return bend_dir_.size(); }
+    std::uint32_t period() const noexcept { return period_; }
+
+    /// Copies a level's arrays (particle order) into the packed state: iterate, x^n, prediction, inverse mass.
+    template <bool Parallel>
+    void pack(const LevelState& s, const float* px, const float* py, const float* pz);
+    /// Copies the packed iterate back into s.x, s.y, s.z.
+    template <bool Parallel> void unpack(const LevelState& s) const;
+
+    /// The sweep arguments over the packed state (the rest of `a` kept).
+    SweepArgs packed_args(SweepArgs a) noexcept;
+    float* x() noexcept { return x_.data(); }
+    float* y() noexcept { return y_.data(); }
+    float* z() noexcept { return z_.data(); }
+    const float* inv_mass() const noexcept { return inv_mass_.data(); }
+
+    /// Solves chunk `chunk` of colour `colour` (whole sub-grid rows; fixed, so the chunks' residuals are the same
+    /// for any thread count): each movable vertex's new position goes into the packed iterate, through `keep_out`
+    /// when there are colliders (keep_out(particle, float[3])). Returns the chunk's sum of |g|^2 in lane order.
+    template <class KeepOut>
+    double solve_chunk(const SweepArgs& packed, std::size_t colour, std::size_t chunk, bool contact,
+                       KeepOut&& keep_out) noexcept;
+
+  private:
+    friend struct GridSource;
+    std::size_t cell(std::uint32_t cls, std::uint32_t p, std::uint32_t q) const noexcept {
+        return (std::size_t(cls) * (sub_rows_ + 2) + p + 1) * stride_ + halo_columns + q;
+    }
+    static constexpr std::uint32_t halo_columns = 16;
+
+    std::uint32_t period_ = 0, sub_rows_ = 0, sub_columns_ = 0, stride_ = 0;
+    std::size_t cells_ = 0, rows_per_chunk_ = 1, chunks_ = 0, particles_ = 0;
+    std::vector<std::array<std::int32_t, 2>> spring_dir_, bend_dir_; ///< slot -> (dr, dc), ascending
+    std::vector<std::uint32_t> cell_of_;           ///< per particle: its cell
+    AlignedArray<std::uint32_t> particle_;         ///< per cell: its particle (UINT32_MAX outside the cloth)
+    std::vector<std::uint32_t> colour_class_;      ///< per colour (sweep order): its class a * P + b
+    std::vector<std::int32_t> spring_delta_, bend_delta_; ///< per class x slot: neighbour cell - own cell
+    AlignedArray<float> k_, kd_, rest_, q_;        ///< per slot x cell
+    AlignedArray<float> diag_;                     ///< per cell: Q_ii
+    AlignedArray<float> x_, y_, z_, x0_, y0_, z0_, px_, py_, pz_, inv_mass_; ///< packed state, per cell
+};
+
+/// The batch of simd::width cells starting at `o` (solve_lanes's source): own values and neighbours by contiguous
+/// loads at the class's constant offsets.
+struct GridSource {
+    const GridLayout& g;
+    std::size_t o;
+    const std::int32_t* sd; ///< this class's spring deltas
+    const std::int32_t* bd; ///< this class's bending deltas
+    simd::fbatch own(const float* f) const noexcept { return simd::load(f + o); }
+    std::size_t springs() const noexcept { return g.spring_dir_.size(); }
+    std::size_t bends() const noexcept { return g.bend_dir_.size(); }
+    simd::fbatch spring_k(std::size_t s) const noexcept { return simd::load(g.k_.data() + s * g.cells_ + o); }
+    simd::fbatch spring_kd(std::size_t s) const noexcept { return simd::load(g.kd_.data() + s * g.cells_ + o); }
+    simd::fbatch spring_rest(std::size_t s) const noexcept { return simd::load(g.rest_.data() + s * g.cells_ + o); }
+    void spring_pos(std::size_t s, const float* x, const float* y, const float* z, simd::fbatch& ox, simd::fbatch& oy,
+                    simd::fbatch& oz) const noexcept {
+        const std::ptrdiff_t at = std::ptrdiff_t(o) + sd[s];
+        ox = simd::loadu(x + at);
+        oy = simd::loadu(y + at);
+        oz = simd::loadu(z + at);
+    }
+    simd::fbatch bend_q(std::size_t s) const noexcept { return simd::load(g.q_.data() + s * g.cells_ + o); }
+    void bend_pos(std::size_t s, const float* x, const float* y, const float* z, simd::fbatch& ox, simd::fbatch& oy,
+                  simd::fbatch& oz) const noexcept {
+        const std::ptrdiff_t at = std::ptrdiff_t(o) + bd[s];
+        ox = simd::loadu(x + at);
+        oy = simd::loadu(y + at);
+        oz = simd::loadu(z + at);
+    }
+    simd::fbatch bend_diag() const noexcept { return simd::load(g.diag_.data() + o); }
+};
+
+template <class KeepOut>
+double GridLayout::solve_chunk(const SweepArgs& a, std::size_t colour, std::size_t chunk, bool contact,
+                               KeepOut&& keep_out) noexcept {
+    constexpr std::size_t W = simd::width;
+    const std::uint32_t cls = colour_class_[colour];
+    const std::int32_t* sd = spring_delta_.data() + std::size_t(cls) * spring_dir_.size();
+    const std::int32_t* bd = bend_delta_.data() + std::size_t(cls) * bend_dir_.size();
+    const std::size_t p0 = chunk * rows_per_chunk_, p1 = std::min<std::size_t>(sub_rows_, p0 + rows_per_chunk_);
+    double r = 0.0;
+    alignas(64) float g2[W];
+    for (std::size_t p = p0; p < p1; ++p)
+        for (std::uint32_t q = 0; q < sub_columns_; q += W) {
+            const std::size_t o = cell(cls, std::uint32_t(p), q);
+            simd::fbatch ox, oy, oz, og;
+            solve_lanes(GridSource{*this, o, sd, bd}, a, ox, oy, oz, og);
+            simd::store(g2, og);
+            const simd::fbatch w = simd::load(inv_mass_.data() + o);
+            for (std::size_t lane = 0; lane < W; ++lane)
+                if (inv_mass_[o + lane] != 0.0f) r += g2[lane];
+            if (!contact) {
+                const simd::fmask movable = w != simd::fbatch(0.0f);
+                simd::store(x_.data() + o, simd::select(movable, ox, simd::load(x_.data() + o)));
+                simd::store(y_.data() + o, simd::select(movable, oy, simd::load(y_.data() + o)));
+                simd::store(z_.data() + o, simd::select(movable, oz, simd::load(z_.data() + o)));
+                continue;
+            }
+            alignas(64) float lx[W], ly[W], lz[W];
+            simd::store(lx, ox);
+            simd::store(ly, oy);
+            simd::store(lz, oz);
+            for (std::size_t lane = 0; lane < W; ++lane) {
+                if (inv_mass_[o + lane] == 0.0f) continue;
+                float out[3] = {lx[lane], ly[lane], lz[lane]};
+                keep_out(particle_[o + lane], out);
+                x_[o + lane] = out[0];
+                y_[o + lane] = out[1];
+                z_[o + lane] = out[2];
+            }
+        }
+    return r;
+}
+
+} // namespace drape::vbd
