@@ -207,6 +207,7 @@ float contact_project(std::span<const Collider> colliders, const float p0[3], fl
 
 namespace {
 constexpr std::size_t vbd_chunk = 256; ///< vertices per parallel chunk of a colour (fixed: determinism)
+constexpr std::size_t serial_below = 4096; ///< particles under which the sweeps run serially
 }
 
 Solver::Solver() = default;
@@ -320,6 +321,10 @@ void Solver::cook(const Cloth& cloth) {
 template <bool Parallel>
 ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float h, float air_drag) {
     const std::size_t n = graph_.particle_count;
+    // A small cloth (the multilevel solver's coarse levels) runs serially: a parallel loop per colour costs a few
+    // microseconds to start, more than such a colour's work, and the serial twin gives the same bits.
+    if constexpr (Parallel)
+        if (n < serial_below) return run<false>(st, ip, h, air_drag);
     const float inv_h = 1.0f / h;
     const float* inv_mass = st.inv_mass;
     float *x = st.x, *y = st.y, *z = st.z;

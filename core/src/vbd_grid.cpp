@@ -134,22 +134,22 @@ void GridLayout::refresh(const VbdGraph& g) {
     std::fill_n(diag_.data(), cells_, 0.0f);
     for (std::size_t i = 0; i < n; ++i) {
         const std::size_t c = cell_of_[i];
-        const std::size_t cls = (c / stride_) / (sub_rows_ + 2);
+        const std::size_t cls = (c / stride_) % (std::size_t(period_) * period_);
         for (std::uint32_t e = g.spring_offsets[i], s = 0; e < g.spring_offsets[i + 1]; ++e) {
             // The entry's slot: the one whose delta reaches its neighbour's cell (distinct neighbours, distinct
             // cells; cook checked that rows run in ascending slot order).
             const std::int64_t d = std::int64_t(cell_of_[g.spring_neighbour[e]]) - std::int64_t(c);
             while (spring_delta_[cls * spring_dir_.size() + s] != d) ++s;
-            k_[s * cells_ + c] = g.spring_k[e];
-            kd_[s * cells_ + c] = g.spring_kd[e];
-            rest_[s * cells_ + c] = g.spring_rest[e];
+            k_[spring_at(c, s)] = g.spring_k[e];
+            kd_[spring_at(c, s)] = g.spring_kd[e];
+            rest_[spring_at(c, s)] = g.spring_rest[e];
         }
         if (g.bend_diag.empty()) continue;
         diag_[c] = g.bend_diag[i];
         for (std::uint32_t e = g.bend_offsets[i], s = 0; e < g.bend_offsets[i + 1]; ++e) {
             const std::int64_t d = std::int64_t(cell_of_[g.bend_neighbour[e]]) - std::int64_t(c);
             while (bend_delta_[cls * bend_dir_.size() + s] != d) ++s;
-            q_[s * cells_ + c] = g.bend_q[e];
+            q_[bend_at(c, s)] = g.bend_q[e];
         }
     }
 }

@@ -8,8 +8,10 @@
 // classes (a, b). Class (a, b) holds the vertices (a + P p, b + P q) at sub-grid row p and column q. The neighbour of
 // (a + P p, b + P q) at (dr, dc) is in class ((a + dr) mod P, (b + dc) mod P) at (p + floor((a + dr) / P),
 // q + floor((b + dc) / P)), a shift of -1, 0 or +1: one constant index offset per class and direction ("delta").
-// Each class block is (sub_rows + 2) rows of `stride` floats, a row and 16 columns of zero halo round its cells; cells
-// outside the cloth hold zero mass (never written) and zero coefficients (they add exactly nothing).
+// Memory holds sub-grid row p of every class together (row-major over (p, class, q)), so that a batch's neighbours in
+// all directions lie within three such row groups: (sub_rows + 2) row groups of P^2 rows of `stride` floats, with a
+// row group and 16 columns of zero halo round the cells; cells outside the cloth hold zero mass (never written) and
+// zero coefficients (they add exactly nothing).
 #pragma once
 
 #include <array>
@@ -64,9 +66,17 @@ class GridLayout {
   private:
     friend struct GridSource;
     std::size_t cell(std::uint32_t cls, std::uint32_t p, std::uint32_t q) const noexcept {
-        return (std::size_t(cls) * (sub_rows_ + 2) + p + 1) * stride_ + halo_columns + q;
+        return ((std::size_t(p) + 1) * period_ * period_ + cls) * stride_ + halo_columns + q;
     }
     static constexpr std::uint32_t halo_columns = 16;
+    /// Coefficients are stored batch by batch: the simd::width cells of a batch, slot after slot, so that one batch
+    /// reads one contiguous block (one memory stream, not one per slot).
+    std::size_t spring_at(std::size_t cell, std::size_t slot) const noexcept {
+        return (cell - cell % simd::width) * spring_dir_.size() + slot * simd::width + cell % simd::width;
+    }
+    std::size_t bend_at(std::size_t cell, std::size_t slot) const noexcept {
+        return (cell - cell % simd::width) * bend_dir_.size() + slot * simd::width + cell % simd::width;
+    }
 
     std::uint32_t period_ = 0, sub_rows_ = 0, sub_columns_ = 0, stride_ = 0;
     std::size_t cells_ = 0, rows_per_chunk_ = 1, chunks_ = 0, particles_ = 0;
@@ -75,7 +85,7 @@ class GridLayout {
     AlignedArray<std::uint32_t> particle_;         ///< per cell: its particle (UINT32_MAX outside the cloth)
     std::vector<std::uint32_t> colour_class_;      ///< per colour (sweep order): its class a * P + b
     std::vector<std::int32_t> spring_delta_, bend_delta_; ///< per class x slot: neighbour cell - own cell
-    AlignedArray<float> k_, kd_, rest_, q_;        ///< per slot x cell
+    AlignedArray<float> k_, kd_, rest_, q_;        ///< per cell x slot (spring_at, bend_at)
     AlignedArray<float> diag_;                     ///< per cell: Q_ii
     AlignedArray<float> x_, y_, z_, x0_, y0_, z0_, px_, py_, pz_, inv_mass_; ///< packed state, per cell
 };
@@ -90,9 +100,9 @@ struct GridSource {
     simd::fbatch own(const float* f) const noexcept { return simd::load(f + o); }
     std::size_t springs() const noexcept { return g.spring_dir_.size(); }
     std::size_t bends() const noexcept { return g.bend_dir_.size(); }
-    simd::fbatch spring_k(std::size_t s) const noexcept { return simd::load(g.k_.data() + s * g.cells_ + o); }
-    simd::fbatch spring_kd(std::size_t s) const noexcept { return simd::load(g.kd_.data() + s * g.cells_ + o); }
-    simd::fbatch spring_rest(std::size_t s) const noexcept { return simd::load(g.rest_.data() + s * g.cells_ + o); }
+    simd::fbatch spring_k(std::size_t s) const noexcept { return simd::load(g.k_.data() + g.spring_at(o, s)); }
+    simd::fbatch spring_kd(std::size_t s) const noexcept { return simd::load(g.kd_.data() + g.spring_at(o, s)); }
+    simd::fbatch spring_rest(std::size_t s) const noexcept { return simd::load(g.rest_.data() + g.spring_at(o, s)); }
     void spring_pos(std::size_t s, const float* x, const float* y, const float* z, simd::fbatch& ox, simd::fbatch& oy,
                     simd::fbatch& oz) const noexcept {
         const std::ptrdiff_t at = std::ptrdiff_t(o) + sd[s];
@@ -100,7 +110,7 @@ struct GridSource {
         oy = simd::loadu(y + at);
         oz = simd::loadu(z + at);
     }
-    simd::fbatch bend_q(std::size_t s) const noexcept { return simd::load(g.q_.data() + s * g.cells_ + o); }
+    simd::fbatch bend_q(std::size_t s) const noexcept { return simd::load(g.q_.data() + g.bend_at(o, s)); }
     void bend_pos(std::size_t s, const float* x, const float* y, const float* z, simd::fbatch& ox, simd::fbatch& oy,
                   simd::fbatch& oz) const noexcept {
         const std::ptrdiff_t at = std::ptrdiff_t(o) + bd[s];
