@@ -50,13 +50,15 @@ Health Simulation::health() const {
         const float rest = edge_rest_.empty() ? e.rest : edge_rest_[k]; // a seam being sewn: its current rest
         const float dx = s.x[e.b] - s.x[e.a], dy = s.y[e.b] - s.y[e.a], dz = s.z[e.b] - s.z[e.a];
         const float signed_strain = (std::sqrt(dx * dx + dy * dy + dz * dz) - rest) / rest;
-        if (!(signed_strain <= max_stretch)) max_stretch = signed_strain;
+        // The springs the limit acts on: structural, seam and (explicit solver only, strain_limit.cpp) shear.
+        if (e.kind != SpringKind::shear || params_.solver != Solver::implicit)
+            if (!(signed_strain <= max_stretch)) max_stretch = signed_strain;
         if (e.kind != SpringKind::structural) continue;
         const float strain = std::fabs(signed_strain);
         if (!(strain <= max_strain)) max_strain = strain; // NaN propagates as the maximum
     }
     h.max_structural_strain = max_strain;
-    h.max_limited_stretch = max_stretch; // structural, shear and seam: the springs strain limiting acts on
+    h.max_limited_stretch = max_stretch;
     h.monitor = monitor_.figures();
     return h;
 }

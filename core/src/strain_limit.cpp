@@ -41,6 +41,9 @@ namespace {
 
 /// Springs per parallel chunk of a colour group (fixed: the partition never depends on the thread count).
 constexpr std::size_t limit_chunk = 4096;
+/// Flags of Simulation::limit_inner_: end a (b) is fewer springs away from the authored pins than the other end; the
+/// spring is a shear spring.
+constexpr std::uint8_t limit_a_inner = 1, limit_b_inner = 2, limit_shear = 4;
 
 struct LimitArgs {
     float* __restrict x;
@@ -53,6 +56,8 @@ struct LimitArgs {
     const std::uint32_t* __restrict a;
     const std::uint32_t* __restrict b;
     const float* __restrict rest;
+    const std::uint8_t* __restrict inner; ///< null (explicit solver), or per spring limit_inner_'s flags (implicit)
+    bool one_sided;                        ///< with `inner`: move only the far end (not while a grab is held)
     float stretch;     ///< 1 + ratio
     float tolerated;   ///< 1 + 1.05 ratio: a spring longer than this before its correction keeps the sweeps going
     /// Change of u, v, w per unit displacement: Euler (velocity) 1 / (K dt), Verlet (displacement per step) 1 / K.
@@ -63,6 +68,7 @@ struct LimitArgs {
 bool limit_range(const LimitArgs& c, std::size_t begin, std::size_t end) noexcept {
     bool over = false;
     for (std::size_t k = begin; k < end; ++k) {
+        if (c.inner && (c.inner[k] & limit_shear)) continue; // the implicit solver limits no shear spring
         const std::uint32_t ia = c.a[k], ib = c.b[k];
         const float dx = c.x[ib] - c.x[ia], dy = c.y[ib] - c.y[ia], dz = c.z[ib] - c.z[ia];
         const float l2 = dx * dx + dy * dy + dz * dz;
@@ -70,7 +76,11 @@ bool limit_range(const LimitArgs& c, std::size_t begin, std::size_t end) noexcep
         if (!(l2 > l_max * l_max)) continue;
         const float l_tol = c.tolerated * c.rest[k];
         over = over || l2 > l_tol * l_tol;
-        const float wa = c.inv_mass[ia], wb = c.inv_mass[ib];
+        float wa = c.inv_mass[ia], wb = c.inv_mass[ib];
+        if (c.one_sided) { // the end nearer the fixed particles stays (unless the far end cannot move)
+            if ((c.inner[k] & limit_a_inner) && wb != 0.0f) wa = 0.0f;
+            if ((c.inner[k] & limit_b_inner) && wa != 0.0f) wb = 0.0f;
+        }
         const float wsum = wa + wb;
         if (wsum == 0.0f) continue;
         const float l = std::sqrt(l2);
@@ -102,9 +112,10 @@ void Simulation::cook_strain_limit() {
     for (std::uint32_t k = 0; k < cloth_.edges.size(); ++k)
         if (cloth_.edges[k].kind != SpringKind::bend) limited.push_back(k);
 
-    // Breadth-first levels from the authored pins over the limited springs.
-    constexpr std::uint32_t unreached = std::numeric_limits<std::uint32_t>::max();
-    std::vector<std::uint32_t> level(n, unreached), adj_offsets(n + 1, 0), adj;
+    // Adjacency over the limited springs (kept: update_limit_levels walks it again when pins or grabs change).
+    std::vector<std::uint32_t>& adj_offsets = limit_adj_offsets_;
+    std::vector<std::uint32_t>& adj = limit_adj_;
+    adj_offsets.assign(n + 1, 0);
     for (std::uint32_t k : limited) {
         ++adj_offsets[cloth_.edges[k].a + 1];
         ++adj_offsets[cloth_.edges[k].b + 1];
@@ -118,20 +129,12 @@ void Simulation::cook_strain_limit() {
             adj[fill[cloth_.edges[k].b]++] = cloth_.edges[k].a;
         }
     }
-    std::vector<std::uint32_t> queue;
-    for (std::uint32_t i = 0; i < n; ++i)
-        if (inv_mass_authored_[i] == 0.0f) {
-            level[i] = 0;
-            queue.push_back(i);
-        }
-    for (std::size_t head = 0; head < queue.size(); ++head) {
-        const std::uint32_t i = queue[head];
-        for (std::uint32_t k = adj_offsets[i]; k < adj_offsets[i + 1]; ++k)
-            if (level[adj[k]] == unreached) {
-                level[adj[k]] = level[i] + 1;
-                queue.push_back(adj[k]);
-            }
-    }
+    limit_level_.resize(n);
+    limit_queue_.resize(n);
+    // Breadth-first levels from the authored pins: the order of the passes.
+    std::vector<float> authored(inv_mass_authored_.begin(), inv_mass_authored_.begin() + std::ptrdiff_t(n));
+    limit_levels(authored.data());
+    const std::vector<std::uint32_t> level = limit_level_;
     // Springs by level (the larger level of the two ends; unreached parts last), stable within a level.
     auto spring_level = [&](std::uint32_t k) {
         return std::max(level[cloth_.edges[k].a], level[cloth_.edges[k].b]);
@@ -159,15 +162,46 @@ void Simulation::cook_strain_limit() {
     limit_a_.resize(count);
     limit_b_.resize(count);
     limit_rest_.resize(count);
+    limit_inner_.resize(count);
     for (std::size_t k = 0; k < count; ++k) {
         const Edge& e = cloth_.edges[limit_groups_.edge_index[k]];
         limit_a_[k] = e.a;
         limit_b_[k] = e.b;
+        limit_inner_[k] = e.kind == SpringKind::shear ? limit_shear : 0;
         limit_rest_[k] = edge_rest_.empty() ? e.rest : edge_rest_[limit_groups_.edge_index[k]];
         if (e.kind == SpringKind::seam) {
             limit_seam_slot_.push_back(static_cast<std::uint32_t>(k));
             limit_seam_edge_.push_back(limit_groups_.edge_index[k]);
         }
+    }
+    update_limit_levels();
+}
+
+void Simulation::limit_levels(const float* inv_mass) noexcept {
+    constexpr std::uint32_t unreached = std::numeric_limits<std::uint32_t>::max();
+    const std::size_t n = limit_level_.size();
+    std::size_t tail = 0;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        limit_level_[i] = inv_mass[i] == 0.0f ? 0 : unreached;
+        if (inv_mass[i] == 0.0f) limit_queue_[tail++] = i;
+    }
+    for (std::size_t head = 0; head < tail; ++head) {
+        const std::uint32_t i = limit_queue_[head];
+        for (std::uint32_t k = limit_adj_offsets_[i]; k < limit_adj_offsets_[i + 1]; ++k)
+            if (limit_level_[limit_adj_[k]] == unreached) {
+                limit_level_[limit_adj_[k]] = limit_level_[i] + 1;
+                limit_queue_[tail++] = limit_adj_[k];
+            }
+    }
+}
+
+void Simulation::update_limit_levels() noexcept {
+    if (limit_a_.empty()) return;
+    limit_levels(cloth_.inv_mass.data()); // every particle fixed now: authored pins, user pins, the grab
+    for (std::size_t k = 0; k < limit_a_.size(); ++k) {
+        const std::uint32_t la = limit_level_[limit_a_[k]], lb = limit_level_[limit_b_[k]];
+        limit_inner_[k] = static_cast<std::uint8_t>((limit_inner_[k] & limit_shear) | (la < lb ? limit_a_inner : 0) |
+                                                    (lb < la ? limit_b_inner : 0));
     }
 }
 
@@ -176,9 +210,11 @@ template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, b
     if (sl.ratio <= 0.0f || limit_a_.empty() || (steps_done_ + 1) % sl.every != 0) return false;
     LimitArgs c{out.x.data(), out.y.data(), out.z.data(), out.u.data(), out.v.data(), out.w.data(),
                 cloth_.inv_mass.data(), limit_a_.data(), limit_b_.data(), limit_rest_.data(),
-                1.0f + sl.ratio, 1.0f + 1.05f * sl.ratio,
-                params_.integrator == Integrator::symplectic_euler ? 1.0f / (float(sl.every) * params_.dt)
-                                                                   : 1.0f / float(sl.every)};
+                params_.solver == Solver::implicit ? limit_inner_.data() : nullptr,
+                params_.solver == Solver::implicit && grabbed_ == SIZE_MAX, 1.0f + sl.ratio, 1.0f + 1.05f * sl.ratio,
+                params_.solver == Solver::implicit ? 0.0f
+                : params_.integrator == Integrator::symplectic_euler ? 1.0f / (float(sl.every) * params_.dt)
+                                                                     : 1.0f / float(sl.every)};
     // At least `passes` sweeps; more (up to strain_limit_max_passes) while a sweep still found a spring over
     // 1.05 x the limit, so a limit that can hold does (the JSON of `drape run` reports what was honoured).
     for (std::uint32_t pass = 0; pass < strain_limit_max_passes; ++pass) {

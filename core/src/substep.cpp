@@ -203,7 +203,8 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
         rebaseline_ = true;
     }
     apply_user_constraints();
-    if (rebaseline_) {
+    if (rebaseline_) { // pins, grabs or constants changed
+        update_limit_levels();
         monitor_.rebaseline<Parallel>(cloth_, params_, cur(), steps_done_);
         rebaseline_ = false;
     }

@@ -128,7 +128,8 @@ struct Health {
     double kinetic_energy = 0.0;        ///< J
     bool finite = true;
     float max_speed = 0.0f;             ///< m/s, the fastest particle
-    /// Largest stretch (l - l0) / l0 over the strain-limited springs (structural, shear, seam); 0 without them.
+    /// Largest stretch (l - l0) / l0 over the springs strain limiting acts on (structural, seam; shear with the explicit
+    /// solver only); 0 without them.
     float max_limited_stretch = 0.0f;
     HealthFigures monitor;              ///< the monitor's last check: figures, bounds, healthy
 };
@@ -267,8 +268,17 @@ class Simulation {
     ColourGroups limit_groups_;
     std::vector<std::uint8_t> limit_serial_; ///< per group: 1 = overflow group, run serially
     std::vector<std::uint32_t> limit_a_, limit_b_;
+    /// Per limited spring, flags for the implicit solver's limit (core/src/strain_limit.cpp): which end is nearer the
+    /// fixed particles (it moves only the far end), and whether it is a shear spring (not limited there).
+    std::vector<std::uint8_t> limit_inner_;
+    /// The limited springs' adjacency, and breadth-first levels and queue (cooked once; update_limit_levels).
+    std::vector<std::uint32_t> limit_adj_offsets_, limit_adj_, limit_level_, limit_queue_;
     std::vector<float> limit_rest_;
     void cook_strain_limit();
+    /// limit_level_: springs away from the nearest particle with inverse mass 0 in `inv_mass`. No allocation.
+    void limit_levels(const float* inv_mass) noexcept;
+    /// Refreshes limit_inner_'s ends from the particles fixed now (after a pin, a grab or its release). No allocation.
+    void update_limit_levels() noexcept;
     // Sewing (SimulationParams::sewing_speed, sewing.cpp): per seam, in SeamSet order, its current rest length; per
     // edge, the current rest length (Edge::rest except seams being sewn). Empty without seams. update_sewing() runs
     // before each substep or implicit step while a seam is still longer than its rest.
