@@ -132,9 +132,8 @@ void Simulation::cook_strain_limit() {
     limit_level_.resize(n);
     limit_queue_.resize(n);
     // Breadth-first levels from the authored pins: the order of the passes.
-    std::vector<float> authored(inv_mass_authored_.begin(), inv_mass_authored_.begin() + std::ptrdiff_t(n));
-    limit_levels(authored.data());
-    const std::vector<std::uint32_t> level = limit_level_;
+    limit_levels(inv_mass_authored_.data());
+    const std::vector<std::uint32_t>& level = limit_level_; // update_limit_levels below refills it, after the sort
     // Springs by level (the larger level of the two ends; unreached parts last), stable within a level.
     auto spring_level = [&](std::uint32_t k) {
         return std::max(level[cloth_.edges[k].a], level[cloth_.edges[k].b]);

@@ -215,20 +215,21 @@ struct SliceSource {
     }
     void spring_pos(std::size_t s, const float* x, const float* y, const float* z, simd::fbatch& ox, simd::fbatch& oy,
                     simd::fbatch& oz) const noexcept {
-        const simd::ibatch j = simd::load_indices(sl.spring_neighbour.data() + sb + s * simd::width);
-        ox = simd::gather(x, j);
-        oy = simd::gather(y, j);
-        oz = simd::gather(z, j);
+        gather3(sl.spring_neighbour.data() + sb + s * simd::width, x, y, z, ox, oy, oz);
     }
     simd::fbatch bend_q(std::size_t s) const noexcept { return simd::load(sl.bend_q.data() + bb + s * simd::width); }
     void bend_pos(std::size_t s, const float* x, const float* y, const float* z, simd::fbatch& ox, simd::fbatch& oy,
                   simd::fbatch& oz) const noexcept {
-        const simd::ibatch j = simd::load_indices(sl.bend_neighbour.data() + bb + s * simd::width);
+        gather3(sl.bend_neighbour.data() + bb + s * simd::width, x, y, z, ox, oy, oz);
+    }
+    simd::fbatch bend_diag() const noexcept { return simd::gather(graph.bend_diag.data(), vi); }
+    static void gather3(const std::uint32_t* index, const float* x, const float* y, const float* z, simd::fbatch& ox,
+                        simd::fbatch& oy, simd::fbatch& oz) noexcept {
+        const simd::ibatch j = simd::load_indices(index);
         ox = simd::gather(x, j);
         oy = simd::gather(y, j);
         oz = simd::gather(z, j);
     }
-    simd::fbatch bend_diag() const noexcept { return simd::gather(graph.bend_diag.data(), vi); }
 };
 
 /// The local step of the slice's lanes (all of them computed; the caller writes only the live, movable ones): new

@@ -105,20 +105,20 @@ struct GridSource {
     simd::fbatch spring_rest(std::size_t s) const noexcept { return simd::load(g.rest_.data() + g.spring_at(o, s)); }
     void spring_pos(std::size_t s, const float* x, const float* y, const float* z, simd::fbatch& ox, simd::fbatch& oy,
                     simd::fbatch& oz) const noexcept {
-        const std::ptrdiff_t at = std::ptrdiff_t(o) + sd[s];
-        ox = simd::loadu(x + at);
-        oy = simd::loadu(y + at);
-        oz = simd::loadu(z + at);
+        load3(std::ptrdiff_t(o) + sd[s], x, y, z, ox, oy, oz);
     }
     simd::fbatch bend_q(std::size_t s) const noexcept { return simd::load(g.q_.data() + g.bend_at(o, s)); }
     void bend_pos(std::size_t s, const float* x, const float* y, const float* z, simd::fbatch& ox, simd::fbatch& oy,
                   simd::fbatch& oz) const noexcept {
-        const std::ptrdiff_t at = std::ptrdiff_t(o) + bd[s];
+        load3(std::ptrdiff_t(o) + bd[s], x, y, z, ox, oy, oz);
+    }
+    simd::fbatch bend_diag() const noexcept { return simd::load(g.diag_.data() + o); }
+    static void load3(std::ptrdiff_t at, const float* x, const float* y, const float* z, simd::fbatch& ox,
+                      simd::fbatch& oy, simd::fbatch& oz) noexcept {
         ox = simd::loadu(x + at);
         oy = simd::loadu(y + at);
         oz = simd::loadu(z + at);
     }
-    simd::fbatch bend_diag() const noexcept { return simd::load(g.diag_.data() + o); }
 };
 
 template <class KeepOut>
