@@ -182,6 +182,10 @@ int main(int argc, char** argv) {
     view_cmd->add_option("--tolerance", view.tolerance,
                          "Implicit solver: stop a step once its residual is below this fraction of the first sweep's")
         ->check(in_range<float>(0.0f, 1.0f));
+    view_cmd->add_option("--strain-limit", view.strain_limit,
+                         "Strain limiting: largest stretch of structural and seam springs, and with the explicit solver "
+                         "shear springs (0.1 = 10%; 0 = off) [scene's]")
+        ->check(in_range<float>(0.0f, 10.0f));
     view_cmd->add_option("--dt", view.dt,
                          "Implicit solver: the step in seconds [1/60 s, a frame at 60 FPS]; explicit: the substep, "
                          "at most the stability bound [default 0.9 x the bound]")

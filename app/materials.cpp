@@ -164,6 +164,7 @@ void apply_solver_flags(SceneSpec& spec, const SolverFlags& f) {
                                "; add --solver implicit");
     if (f.iterations) spec.physics.implicit.iterations = *f.iterations;
     if (f.tolerance) spec.physics.implicit.tolerance = *f.tolerance;
+    if (f.strain_limit) spec.physics.strain_limit.ratio = *f.strain_limit;
 }
 
 } // namespace drape::app

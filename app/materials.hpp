@@ -46,6 +46,7 @@ struct SolverFlags {
     std::optional<std::uint32_t> iterations; ///< --iterations K, 1..1000
     std::optional<float> tolerance;          ///< --tolerance T, 0..1
     std::optional<std::string> integrator;   ///< --integrator euler|verlet
+    std::optional<float> strain_limit;       ///< --strain-limit R, 0..10 (0 = off): the largest stretch
 };
 /// Applies them to a scene: --solver implicit switches a Verlet scene to the Euler integrator (the implicit solver
 /// keeps velocities); throws InvalidInput (exit code 2) naming the flag for --integrator verlet with the implicit

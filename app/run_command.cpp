@@ -97,12 +97,11 @@ int run_command(const RunOptions& o) {
     if (o.stiffness) spec.stiffness = *o.stiffness;
     if (o.damping) spec.damping_ratio = *o.damping;
     if (o.drag) spec.physics.air_drag = *o.drag;
-    apply_solver_flags(spec, {o.solver, o.iterations, o.tolerance, o.integrator});
+    apply_solver_flags(spec, {o.solver, o.iterations, o.tolerance, o.integrator, o.strain_limit});
     const bool implicit = spec.physics.solver == Solver::implicit;
     if (o.wind) spec.physics.wind.enabled = true;
     if (o.aero) spec.physics.aero.enabled = true;
     if (o.wind_strength) spec.physics.wind.strength = *o.wind_strength;
-    if (o.strain_limit) spec.physics.strain_limit.ratio = *o.strain_limit;
     if (o.strain_passes) spec.physics.strain_limit.passes = *o.strain_passes;
     if (o.strain_every) spec.physics.strain_limit.every = *o.strain_every;
     if (o.self_collision) spec.physics.self_collision.thickness = *o.self_collision;

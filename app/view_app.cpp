@@ -77,7 +77,7 @@ Viewer::Viewer(const ViewOptions& options) : options_(options) {
     // The scene first: a bad --scene or --size is reported before any window opens.
     session_ = std::make_unique<ViewSession>(options.scene, options.size, options.threads, options.substeps,
                                              options.material,
-                                             SolverFlags{options.solver, options.iterations, options.tolerance, {}},
+                                             SolverFlags{options.solver, options.iterations, options.tolerance, {}, options.strain_limit},
                                              options.dt);
     show_ui_ = options.ui;
     scripted_mouse = options.demo_grab;
@@ -720,6 +720,7 @@ void Viewer::print_stats_json() const {
                          {"budget", session_->iteration_budget()},
                          {"budget_ms", session_->sim_budget_ms()}};
     j["max_strain"] = last_publish_.max_structural_strain;
+    j["strain_limit"] = s.params().strain_limit.ratio; // 0 = off
     j["finite"] = last_publish_.finite && session_->error().empty();
     j["camera"] = {{"yaw", camera_.yaw}, {"pitch", camera_.pitch}, {"distance", camera_.distance}};
     j["stiffness"] = session_->fabric().stiffness;

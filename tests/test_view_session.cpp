@@ -778,8 +778,9 @@ TEST(ViewSessionImplicit, IterationBudgetFollowsTheFrameTime) {
 }
 
 TEST(ViewSessionImplicit, FlagsScenesAndSavedScenes) {
-    ViewSession s("hang", 16, 1, std::nullopt, std::string("springs"), SolverFlags{"implicit", 12, 0.01f, {}}, 0.02);
+    ViewSession s("hang", 16, 1, std::nullopt, std::string("springs"), SolverFlags{"implicit", 12, 0.01f, {}, 0.1f}, 0.02);
     EXPECT_EQ(s.solver(), Solver::implicit);
+    EXPECT_FLOAT_EQ(s.params().strain_limit.ratio, 0.1f); // --strain-limit
     EXPECT_FLOAT_EQ(s.params().dt, 0.02f);
     EXPECT_EQ(s.max_iterations(), 12u);
     EXPECT_EQ(s.params().implicit.tolerance, 0.01f);
@@ -792,7 +793,7 @@ TEST(ViewSessionImplicit, FlagsScenesAndSavedScenes) {
     EXPECT_EQ(spec.physics.implicit.iterations, 12u);
     // Bad flags: refused naming the flag.
     try {
-        ViewSession bad("hang", 16, 1, std::nullopt, std::string("springs"), SolverFlags{{}, 12, {}, {}});
+        ViewSession bad("hang", 16, 1, std::nullopt, std::string("springs"), SolverFlags{{}, 12, {}, {}, {}});
         ADD_FAILURE() << "--iterations with the explicit solver was accepted";
     } catch (const InvalidInput& e) {
         EXPECT_NE(std::string(e.what()).find("--iterations"), std::string::npos) << e.what();
