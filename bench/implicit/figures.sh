@@ -6,6 +6,7 @@
 #   realtime1000.md / .json   the same at N = 1000
 #   convergence.md / .json / .csv / .png   relative energy error against iterations and wall time, N = 100, 316
 #   throughput.md / .json     vertex-iterations/s beside particle-substeps/s; thread scaling 1 -> 2
+#   rest.md / .json           whether the hang comes to rest (largest motion per step once a second), N = 32, 100
 #   machine.txt               date, CPU, load average before and after
 # Usage: bench/implicit/figures.sh [--out DIR] [--build DIR] [--quick] [-- extra drape_implicit realtime flags]
 #   --quick   N = 100 only with a 4 s settle (a smoke run of the whole pipeline, a few minutes)
@@ -51,6 +52,8 @@ echo "== throughput" >&2
 echo "== convergence" >&2
 "$bin" convergence --n "$cv_sizes" --threads 2 --csv "$out/convergence.csv" --json-out "$out/convergence.json" | tee "$out/convergence.md"
 "$py" "$root/bench/implicit/plot_convergence.py" "$out/convergence.csv" "$out/convergence.png"
+echo "== rest" >&2
+"$bin" rest --n 32,100 --threads 2 --json-out "$out/rest.json" | tee "$out/rest.md"
 echo "== realtime" >&2
 "$bin" realtime --n "$rt_sizes" --threads 2 "${settle[@]}" "${extra[@]}" --json-out "$out/realtime.json" | tee "$out/realtime.md"
 if [[ $quick == 0 ]]; then

@@ -7,6 +7,8 @@
 //                               Gauss-Seidel VBD with and without Chebyshev, Jacobi (N = 100, 316); writes a CSV
 //   drape_implicit throughput   vertex-iterations/s beside explicit particle-substeps/s; 1 -> T thread scaling
 //                               (N = 316, 1000)
+//   drape_implicit rest         whether the hang comes to rest (air drag --ref-drag, --duration default 8 s):
+//                               the largest motion in a step once a second, multilevel and single level (N = 32, 100)
 // Options: --n N[,N..] (repeatable) grid sizes; --threads T (default 2); --json; --dt S implicit step (default
 // 1/30); --iterations K (default 30); --rho R Chebyshev (default 0.9, 0 = off); --strain-limit R implicit runs'
 // strain limit (default off); --single-level the implicit solver without its multilevel guess; --duration S timed run (default 2); --settle-time S (default 10; 0 = no settled shape, no reference); --explicit-budget S
@@ -51,7 +53,7 @@ double number(const char* flag, const char* text, double lo, double hi) {
 
 int main(int argc, char** argv) {
     if (argc < 2 || std::strcmp(argv[1], "--help") == 0) {
-        std::fprintf(stderr, "usage: drape_implicit realtime|convergence|throughput [--n N,..] [--threads T] [--json] "
+        std::fprintf(stderr, "usage: drape_implicit realtime|convergence|throughput|rest [--n N,..] [--threads T] [--json] "
                              "[--dt S] [--iterations K] [--rho R] [--strain-limit R] [--single-level] [--duration S] [--settle-time S] "
                              "[--explicit-budget S] [--explicit-settle-budget S] [--explicit-short S] [--newton-max-n N] [--newton-step-max-n N] [--newton-iterations K] [--ref-iterations K] [--ref-steps S] [--ref-drag D] "
                              "[--kmax K] [--csv FILE | --out DIR] [--json-out FILE]\n");
@@ -83,7 +85,10 @@ int main(int argc, char** argv) {
             opt.rho = static_cast<float>(number("--rho", value(), 0, 0.999));
         }
         else if (s == "--strain-limit") opt.strain_limit = static_cast<float>(number("--strain-limit", value(), 0, 10));
-        else if (s == "--duration") opt.duration = number("--duration", value(), 0.001, 600);
+        else if (s == "--duration") {
+            opt.duration = number("--duration", value(), 0.001, 600);
+            opt.duration_given = true;
+        }
         else if (s == "--settle-time") opt.settle_time = number("--settle-time", value(), 0, 600);
         else if (s == "--explicit-budget") opt.explicit_budget = number("--explicit-budget", value(), 0, 1e5);
         else if (s == "--explicit-settle-budget")
@@ -107,9 +112,12 @@ int main(int argc, char** argv) {
     }
     try {
         if (cmd == "throughput") return cmd_throughput(opt);
-        if (cmd != "realtime" && cmd != "convergence") bad("unknown command " + cmd + " (realtime, convergence, throughput)");
+        if (cmd != "realtime" && cmd != "convergence" && cmd != "rest")
+            bad("unknown command " + cmd + " (realtime, convergence, throughput, rest)");
         Workers workers(opt.threads);
-        return workers.run([&]() -> int { return cmd == "realtime" ? cmd_realtime(opt) : cmd_convergence(opt); });
+        return workers.run([&]() -> int {
+            return cmd == "realtime" ? cmd_realtime(opt) : cmd == "rest" ? cmd_rest(opt) : cmd_convergence(opt);
+        });
     } catch (const std::exception& e) {
         std::fprintf(stderr, "drape_implicit: %s\n", e.what());
         return 1;
