@@ -144,6 +144,17 @@ bool triangles_meet(const std::array<I3, 3>& t, const std::array<I3, 3>& u) {
     return false;
 }
 
+// Seams 5-2, 2-7 and 9-3 (given in any order, a chain longer than one seam) join {2, 5, 7} and {3, 9}.
+TEST(SelfCollisionGeometry, SewnRepresentativesJoinSeamChains) {
+    SeamSet seams;
+    seams.a = {5, 7, 9};
+    seams.b = {2, 2, 3};
+    const std::vector<std::uint32_t> rep = sewn_representatives(seams, 10);
+    const std::vector<std::uint32_t> expected = {0, 1, 2, 3, 4, 2, 6, 2, 8, 3};
+    EXPECT_EQ(rep, expected);
+    EXPECT_EQ(sewn_representatives(SeamSet{}, 3), (std::vector<std::uint32_t>{0, 1, 2}));
+}
+
 TEST(SelfCollisionGeometry, ExactTriangleTestOnKnownCases) {
     auto tri = [](std::array<float, 9> c) {
         return std::array<I3, 3>{snap(c[0], c[1], c[2]), snap(c[3], c[4], c[5]), snap(c[6], c[7], c[8])};
@@ -159,18 +170,7 @@ TEST(SelfCollisionGeometry, ExactTriangleTestOnKnownCases) {
 /// Pairs of triangles sharing no vertex that meet (bounding boxes first). Particles sewn together by the cloth's seams
 /// count as one vertex (the triangles on either side of a closed seam touch there).
 std::size_t intersecting_pairs(const Simulation& sim) {
-    const SeamSet& seams = sim.cloth().seams;
-    std::vector<std::uint32_t> rep(sim.cloth().particle_count);
-    for (std::uint32_t i = 0; i < rep.size(); ++i) rep[i] = i;
-    auto root = [&](std::uint32_t i) {
-        while (rep[i] != i) i = rep[i];
-        return i;
-    };
-    for (std::size_t k = 0; k < seams.a.size(); ++k) {
-        const std::uint32_t a = root(seams.a[k]), b = root(seams.b[k]);
-        if (a != b) rep[std::max(a, b)] = std::min(a, b);
-    }
-    for (std::uint32_t i = 0; i < rep.size(); ++i) rep[i] = root(i);
+    const std::vector<std::uint32_t> rep = sewn_representatives(sim.cloth().seams, sim.cloth().particle_count);
     const auto x = sim.x(), y = sim.y(), z = sim.z();
     const auto& tri = sim.cloth().triangles;
     const std::size_t tris = tri.size() / 3;

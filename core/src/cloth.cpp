@@ -119,4 +119,19 @@ std::optional<GridStructuralRest> uniform_grid_structural(const Cloth& cloth) {
     return rest;
 }
 
+std::vector<std::uint32_t> sewn_representatives(const SeamSet& seams, std::size_t particle_count) {
+    std::vector<std::uint32_t> rep(particle_count);
+    for (std::uint32_t i = 0; i < rep.size(); ++i) rep[i] = i;
+    auto root = [&](std::uint32_t i) {
+        while (rep[i] != i) i = rep[i] = rep[rep[i]];
+        return i;
+    };
+    for (std::size_t k = 0; k < seams.a.size(); ++k) {
+        const std::uint32_t ra = root(seams.a[k]), rb = root(seams.b[k]);
+        if (ra != rb) rep[std::max(ra, rb)] = std::min(ra, rb);
+    }
+    for (std::uint32_t i = 0; i < rep.size(); ++i) rep[i] = root(i);
+    return rep;
+}
+
 } // namespace drape

@@ -91,19 +91,8 @@ void Simulation::cook_self_collision() {
         }
     std::sort(keys.begin(), keys.end());
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    // Particles joined by seams (a seam pulls them together: they are one point of the garment, not a contact):
-    // union-find to the lowest index of each joined set.
-    sc_sewn_.resize(n);
-    for (std::uint32_t i = 0; i < n; ++i) sc_sewn_[i] = i;
-    auto root = [&](std::uint32_t i) {
-        while (sc_sewn_[i] != i) i = sc_sewn_[i] = sc_sewn_[sc_sewn_[i]];
-        return i;
-    };
-    for (std::size_t k = 0; k < cloth_.seams.a.size(); ++k) {
-        const std::uint32_t ra = root(cloth_.seams.a[k]), rb = root(cloth_.seams.b[k]);
-        if (ra != rb) sc_sewn_[std::max(ra, rb)] = std::min(ra, rb);
-    }
-    for (std::uint32_t i = 0; i < n; ++i) sc_sewn_[i] = root(i);
+    // Particles joined by seams are one point of the garment, not a contact.
+    sc_sewn_ = sewn_representatives(cloth_.seams, n);
     sc_edges_.resize(2 * keys.size());
     for (std::size_t e = 0; e < keys.size(); ++e) {
         sc_edges_[2 * e] = std::uint32_t(keys[e] >> 32);

@@ -74,6 +74,10 @@ struct SeamSet {
     bool empty() const noexcept { return a.empty(); }
 };
 
+/// Per particle (particle_count entries): the lowest index of the particles joined to it through seams (a seam pulls
+/// its ends together: they are one point of the garment), itself where no seam touches it. Union-find.
+std::vector<std::uint32_t> sewn_representatives(const SeamSet& seams, std::size_t particle_count);
+
 /// Everything about a cloth that does not change while it is simulated.
 struct Cloth {
     std::size_t particle_count = 0; ///< real particles
