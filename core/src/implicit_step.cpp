@@ -41,8 +41,7 @@ constexpr std::uint32_t coarsest_side = 5;
 /// more sweeps on a 5 x 5 .. 40 x 40 copy of the cloth solve that copy's own problem better, and its shape (its clips
 /// spread over a quarter of the cloth) is not the fine cloth's. Measured (drape_implicit convergence, one step of the
 /// wool hang, error after 30 fine sweeps): at N = 316 a cap of 1000 gave 6.25e-3, 240 gave 3.47e-3, 120 gave 2.06e-3
-/// and 60 gave 3.09e-3; at N = 100, 1.21e-2 / 1.25e-2 / 1.67e-2 / 2.96e-2, where the sweeps of the two smallest
-/// levels dominate the step's time (docs/implicit.md, "Coarse sweeps").
+/// and 60 gave 3.09e-3; at N = 100, 1.21e-2 / 1.25e-2 / 1.67e-2 / 2.96e-2 (docs/implicit.md, "Coarse sweeps").
 constexpr std::uint32_t coarse_iterations_max = 240;
 
 /// Bilinear sample of a columns x rows grid array at fractional node coordinates (fi, fj).
