@@ -29,7 +29,7 @@ struct RunFigures {
 RunFigures run(Simulation& sim, const Options& opt, bool budgeted) {
     RunFigures f;
     f.dt = sim.params().dt;
-    const std::size_t total = static_cast<std::size_t>(std::llround(opt.duration / f.dt));
+    const std::size_t total = static_cast<std::size_t>(std::llround(opt.duration.value_or(2.0) / f.dt));
     // Chunks of about 0.05 s simulated, so that an over-budget explicit run stops early.
     const std::size_t chunk = std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(opt.explicit_short / f.dt)));
     std::size_t done = 0;
@@ -74,7 +74,7 @@ int cmd_realtime(const Options& opt) {
     Table t;
     char title[200];
     std::snprintf(title, sizeof title, "Real-time factor on the hang scene (wool, 2 cm clips): %g s timed; settled shape at %g s",
-                  opt.duration, opt.settle_time);
+                  opt.duration.value_or(2.0), opt.settle_time);
     t.title = title;
     t.columns = {"N",          "particles",      "solver",       "dt (s)",      "iterations", "strain limit",
                  "timed (s)",  "wall (s)",       "real-time x",  "max strain at t_end", "finite",

@@ -15,7 +15,7 @@ int cmd_rest(const Options& opt) {
     rep.command = "rest";
     rep.threads = opt.threads;
     const std::vector<std::uint32_t> sizes = opt.sizes.empty() ? std::vector<std::uint32_t>{32, 100} : opt.sizes;
-    const double duration = opt.duration_given ? opt.duration : 8.0;
+    const double duration = opt.duration.value_or(8.0);
     Table t;
     t.title = "Coming to rest: hang, h = " + std::to_string(opt.dt).substr(0, 7) + " s, " +
               std::to_string(opt.iterations) + " iterations, Chebyshev " + std::to_string(opt.rho).substr(0, 4) +

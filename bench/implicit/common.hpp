@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,8 +24,7 @@ struct Options {
     float rho = 0.9f;                      ///< --rho Chebyshev spectral radius estimate (0 = off)
     float strain_limit = 0.0f;             ///< --strain-limit ratio for the implicit run (0 = off)
     bool multilevel = true;                ///< --single-level turns the implicit solver's multilevel guess off
-    double duration = 2.0;                 ///< --duration s, the timed run
-    bool duration_given = false;           ///< --duration was on the command line (rest: default 8 s)
+    std::optional<double> duration;        ///< --duration s: realtime's timed run (default 2), rest's run (default 8)
     double settle_time = 10.0;             ///< --settle-time s, the settled shape
     double explicit_budget = 60.0;         ///< --explicit-budget s of wall time an explicit run may take
     double explicit_settle_budget = 300.0; ///< --explicit-settle-budget s of wall time for the explicit settle run

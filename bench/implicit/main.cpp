@@ -85,10 +85,7 @@ int main(int argc, char** argv) {
             opt.rho = static_cast<float>(number("--rho", value(), 0, 0.999));
         }
         else if (s == "--strain-limit") opt.strain_limit = static_cast<float>(number("--strain-limit", value(), 0, 10));
-        else if (s == "--duration") {
-            opt.duration = number("--duration", value(), 0.001, 600);
-            opt.duration_given = true;
-        }
+        else if (s == "--duration") opt.duration = number("--duration", value(), 0.001, 600);
         else if (s == "--settle-time") opt.settle_time = number("--settle-time", value(), 0, 600);
         else if (s == "--explicit-budget") opt.explicit_budget = number("--explicit-budget", value(), 0, 1e5);
         else if (s == "--explicit-settle-budget")
