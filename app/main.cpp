@@ -102,6 +102,10 @@ int main(int argc, char** argv) {
                     "Implicit solver: stop a step once its residual is below this fraction of the first sweep's "
                     "(0 = always run --iterations) [scene's, 0]")
         ->check(in_range<float>(0.0f, 1.0f));
+    cmd->add_flag("--fas", run.fas,
+                  "Implicit solver, grid cloths of the fabric model: the coarse levels of the multilevel guess solve with the "
+                  "cloth's own force residual (full approximation scheme): a cloth comes to rest at its own equilibrium "
+                  "[scene's, off]");
     cmd->add_option("--material", run.material,
                     "Material: a fabric preset (silk, cotton_shirting, jersey, linen, wool, denim, ...; see drape "
                     "materials), switching the cloth to the fabric model, or springs (the seeds' spring model with "

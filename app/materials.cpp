@@ -158,12 +158,14 @@ void apply_solver_flags(SceneSpec& spec, const SolverFlags& f) {
         spec.physics.integrator = Integrator::symplectic_euler; // a Verlet scene run with --solver implicit
     }
     for (const auto& [given, flag] : {std::pair{f.iterations.has_value(), "--iterations"},
-                                      {f.tolerance.has_value(), "--tolerance"}})
+                                      {f.tolerance.has_value(), "--tolerance"},
+                                      {f.fas, "--fas"}})
         if (given && !implicit)
             throw InvalidInput(std::string(flag) + ": a flag of the implicit solver, but the solver is explicit" + whose +
                                "; add --solver implicit");
     if (f.iterations) spec.physics.implicit.iterations = *f.iterations;
     if (f.tolerance) spec.physics.implicit.tolerance = *f.tolerance;
+    if (f.fas) spec.physics.implicit.fas = true;
     if (f.strain_limit) spec.physics.strain_limit.ratio = *f.strain_limit;
 }
 

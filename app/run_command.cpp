@@ -97,7 +97,7 @@ int run_command(const RunOptions& o) {
     if (o.stiffness) spec.stiffness = *o.stiffness;
     if (o.damping) spec.damping_ratio = *o.damping;
     if (o.drag) spec.physics.air_drag = *o.drag;
-    apply_solver_flags(spec, {o.solver, o.iterations, o.tolerance, o.integrator, o.strain_limit});
+    apply_solver_flags(spec, {o.solver, o.iterations, o.tolerance, o.integrator, o.strain_limit, o.fas});
     const bool implicit = spec.physics.solver == Solver::implicit;
     if (o.wind) spec.physics.wind.enabled = true;
     if (o.aero) spec.physics.aero.enabled = true;
@@ -207,6 +207,7 @@ int run_command(const RunOptions& o) {
                          {"max_iterations", sp.implicit.iterations},
                          {"tolerance", sp.implicit.tolerance},
                          {"chebyshev_rho", sp.implicit.chebyshev_rho},
+                         {"fas", sp.implicit.fas},
                          {"method", sp.implicit.method == ImplicitMethod::jacobi ? "jacobi" : "gauss_seidel"}};
     }
     j["kernel"] = kernel_path_name(sim.kernel());

@@ -19,6 +19,7 @@ struct RunOptions {
     std::optional<std::string> solver;       ///< explicit | implicit
     std::optional<std::uint32_t> iterations; ///< implicit solver: sweeps per step
     std::optional<float> tolerance;          ///< implicit solver: relative residual to stop a step early
+    bool fas = false;                        ///< implicit solver: the multilevel guess's coarse correction
     /// A fabric preset (switches the scene to the fabric model) or "springs" (the seeds' spring model).
     std::optional<std::string> material;
     std::optional<float> stiffness;

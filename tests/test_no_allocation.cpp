@@ -71,6 +71,7 @@ struct AllocCase {
     bool wind;
     MaterialModel model = MaterialModel::springs;
     Solver solver = Solver::explicit_euler;
+    bool fas = false; ///< implicit: the multilevel guess's full approximation scheme
 };
 
 class NoAllocation : public ::testing::TestWithParam<AllocCase> {};
@@ -92,15 +93,18 @@ TEST_P(NoAllocation, StepDoesNotAllocate) {
             p.dt = 1.0f / 30.0f;
             p.implicit.iterations = 10;
             p.strain_limit.ratio = 0.2f;
+            p.implicit.fas = c.fas;
         }
         Simulation sim(std::move(scene.cloth), scene.initial, p);
         sim.step(5); // warm-up: the thread pool starts here
-        sim.grab(hp.n * hp.n / 2, {0.0f, 0.1f, 0.0f});
+        // With fas no grab: a sudden 10 cm grab of the centre blows that solver up (a known fault, docs/implicit.md
+        // "Coarse correction"); this test is about allocations.
+        if (!c.fas) sim.grab(hp.n * hp.n / 2, {0.0f, 0.1f, 0.0f});
         allocations = 0;
         counting = true;
         sim.step(200);
         sim.step_serial(5);
-        sim.move_grab({0.0f, 0.2f, 0.0f});
+        if (!c.fas) sim.move_grab({0.0f, 0.2f, 0.0f});
         sim.step(5);
         counting = false;
         EXPECT_EQ(allocations.load(), 0u);
@@ -123,7 +127,9 @@ INSTANTIATE_TEST_SUITE_P(
                       AllocCase{KernelPath::grid, false, Integrator::verlet, false, MaterialModel::fabric},
                       AllocCase{KernelPath::csr, true, Integrator::symplectic_euler, false, MaterialModel::fabric},
                       AllocCase{KernelPath::grid, true, Integrator::symplectic_euler, true, MaterialModel::fabric,
-                                Solver::implicit}));
+                                Solver::implicit},
+                      AllocCase{KernelPath::grid, true, Integrator::symplectic_euler, false, MaterialModel::fabric,
+                                Solver::implicit, true}));
 
 // Self-collision (self_collide.cpp): its hash, buckets and accumulators are cooked once; a crumpled cloth on the
 // ground, in contact with itself, steps without allocating (both solvers).

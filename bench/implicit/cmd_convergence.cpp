@@ -15,6 +15,7 @@ struct Variant {
     ImplicitMethod method;
     float rho;
     bool multilevel;
+    bool fas = false;
 };
 struct Point {
     std::uint32_t k = 0;
@@ -31,6 +32,7 @@ int cmd_convergence(const Options& opt) {
     const std::vector<Variant> variants = {
         {"Gauss-Seidel VBD", ImplicitMethod::gauss_seidel, 0.0f, true},
         {"Gauss-Seidel VBD + Chebyshev " + std::to_string(rho).substr(0, 4), ImplicitMethod::gauss_seidel, rho, true},
+        {"Gauss-Seidel VBD + Chebyshev + FAS", ImplicitMethod::gauss_seidel, rho, true, true},
         {"Gauss-Seidel VBD + Chebyshev, single level", ImplicitMethod::gauss_seidel, rho, false},
         {"Jacobi", ImplicitMethod::jacobi, 0.0f, true},
         {"Jacobi + Chebyshev " + std::to_string(rho).substr(0, 4), ImplicitMethod::jacobi, rho, true},
@@ -72,7 +74,7 @@ int cmd_convergence(const Options& opt) {
             for (std::uint32_t k : ks) {
                 if (k > opt.kmax) break;
                 Simulation sim = restart(start, implicit_params(start.params(), h, k, variants[v].rho, variants[v].method,
-                                                                0.0f, variants[v].multilevel));
+                                                                0.0f, variants[v].multilevel, variants[v].fas));
                 const auto t0 = std::chrono::steady_clock::now();
                 bool ok = true;
                 try {

@@ -86,9 +86,9 @@ int cmd_realtime(const Options& opt) {
         std::fprintf(stderr, "realtime: N = %u (%zu particles): implicit...\n", n, particles);
         Simulation im(scene.cloth, scene.initial,
                       implicit_params(scene.params, opt.dt, opt.iterations, opt.rho, ImplicitMethod::gauss_seidel,
-                                      opt.strain_limit, opt.multilevel));
+                                      opt.strain_limit, opt.multilevel, opt.fas));
         RunFigures fi = run(im, opt, false);
-        fi.solver = opt.multilevel ? "implicit (multilevel)" : "implicit (single level)";
+        fi.solver = !opt.multilevel ? "implicit (single level)" : opt.fas ? "implicit (multilevel, FAS)" : "implicit (multilevel)";
         fi.iterations = opt.iterations;
         std::fprintf(stderr, "realtime: N = %u: explicit...\n", n);
         Simulation ex(scene.cloth, scene.initial, scene.params);

@@ -1,6 +1,7 @@
 // drape_implicit rest: does the implicit solver bring a hanging cloth to rest? The hang with strong air drag
 // (--ref-drag, default 5/s: the swing decays as e^-5t) stepped for --duration seconds (default 8) with the multilevel
-// guess and without it; once a second: the largest motion of a particle over the last step, the mean height and the
+// guess (without and with the full approximation scheme's coarse correction, ImplicitParams::fas) and without it;
+// once a second: the largest motion of a particle over the last step, the mean height and the
 // last step's relative residual. An exact backward Euler solve stops moving; what moves is the solver's error.
 #include <algorithm>
 #include <cmath>
@@ -23,17 +24,18 @@ int cmd_rest(const Options& opt) {
     t.columns = {"N", "guess", "t (s)", "max motion in the step (mm)", "mean height (m)", "relative residual"};
     for (std::uint32_t n : sizes) {
         bool coarse_grid = true;
-        for (bool multilevel : {true, false}) {
+        for (int variant = 0; variant < 3; ++variant) { // multilevel, multilevel + FAS, single level
+            const bool multilevel = variant < 2, fas = variant == 1;
             if (!coarse_grid) break; // the first run was single level already
             const BuiltScene scene = hang_scene(n);
             SimulationParams p = implicit_params(scene.params, opt.dt, opt.iterations, opt.rho,
-                                                 ImplicitMethod::gauss_seidel, opt.strain_limit, multilevel);
+                                                 ImplicitMethod::gauss_seidel, opt.strain_limit, multilevel, fas);
             p.air_drag = static_cast<float>(opt.ref_drag);
             Simulation sim(scene.cloth, scene.initial, p);
             const std::size_t count = sim.cloth().particle_count;
             std::vector<float> px(count), py(count), pz(count);
             const long steps = std::lround(duration / opt.dt), per_second = std::max(1L, std::lround(1.0 / opt.dt));
-            std::string guess = multilevel ? "multilevel" : "single level";
+            std::string guess = fas ? "multilevel + FAS" : multilevel ? "multilevel" : "single level";
             std::fprintf(stderr, "rest: N = %u, %s\n", n, guess.c_str());
             for (long s = 1; s <= steps; ++s) {
                 std::copy(sim.x().begin(), sim.x().end(), px.begin());

@@ -34,12 +34,12 @@ Rates measure(const BuiltScene& scene, const Options& opt) {
     // Implicit: from the hang after a few steps (moving), each timing a fresh copy's one step.
     Simulation base(scene.cloth, scene.initial,
                     implicit_params(scene.params, opt.dt, k_lo, opt.rho, ImplicitMethod::gauss_seidel, 0.0f,
-                                    opt.multilevel));
+                                    opt.multilevel, opt.fas));
     base.step(3);
     const int repeats = particles > 200000 ? 2 : 4;
     for (std::uint32_t k : {k_lo, k_hi}) {
         Simulation sim = restart(base, implicit_params(base.params(), opt.dt, k, opt.rho, ImplicitMethod::gauss_seidel,
-                                                       0.0f, opt.multilevel));
+                                                       0.0f, opt.multilevel, opt.fas));
         sim.step(1); // warm
         const double t = best_of(repeats, [&] { sim.step(1); });
         (k == k_lo ? r.step_lo : r.step_hi) = t;

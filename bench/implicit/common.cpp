@@ -21,7 +21,7 @@ BuiltScene hang_scene(std::uint32_t n) {
 }
 
 SimulationParams implicit_params(const SimulationParams& base, float dt, std::uint32_t iterations, float rho,
-                                 ImplicitMethod method, float strain_limit, bool multilevel) {
+                                 ImplicitMethod method, float strain_limit, bool multilevel, bool fas) {
     SimulationParams p = base;
     p.solver = Solver::implicit;
     p.integrator = Integrator::symplectic_euler;
@@ -32,6 +32,7 @@ SimulationParams implicit_params(const SimulationParams& base, float dt, std::ui
     p.implicit.method = method;
     p.strain_limit.ratio = strain_limit;
     p.implicit.multilevel = multilevel;
+    p.implicit.fas = fas;
     return p;
 }
 

@@ -24,6 +24,7 @@ struct Options {
     float rho = 0.9f;                      ///< --rho Chebyshev spectral radius estimate (0 = off)
     float strain_limit = 0.0f;             ///< --strain-limit ratio for the implicit run (0 = off)
     bool multilevel = true;                ///< --single-level turns the implicit solver's multilevel guess off
+    bool fas = false;                      ///< --fas: the multilevel guess's coarse correction (ImplicitParams::fas)
     std::optional<double> duration;        ///< --duration s: realtime's timed run (default 2), rest's run (default 8)
     double settle_time = 10.0;             ///< --settle-time s, the settled shape
     double explicit_budget = 60.0;         ///< --explicit-budget s of wall time an explicit run may take
@@ -50,7 +51,8 @@ Simulation restart(const Simulation& sim, const SimulationParams& params);
 
 /// Parameters of the implicit solver for a built scene.
 SimulationParams implicit_params(const SimulationParams& base, float dt, std::uint32_t iterations, float rho,
-                                 ImplicitMethod method, float strain_limit, bool multilevel = true);
+                                 ImplicitMethod method, float strain_limit, bool multilevel = true,
+                                 bool fas = false);
 
 /// One implicit step's data from a simulation's current state (x^n, v^n, a = gravity), evaluated in double.
 struct StepProblem {

@@ -11,7 +11,8 @@
 //                               the largest motion in a step once a second, multilevel and single level (N = 32, 100)
 // Options: --n N[,N..] (repeatable) grid sizes; --threads T (default 2); --json; --dt S implicit step (default
 // 1/30); --iterations K (default 30); --rho R Chebyshev (default 0.9, 0 = off); --strain-limit R implicit runs'
-// strain limit (default off); --single-level the implicit solver without its multilevel guess; --duration S timed run (default 2); --settle-time S (default 10; 0 = no settled shape, no reference); --explicit-budget S
+// strain limit (default off); --single-level the implicit solver without its multilevel guess; --fas the multilevel guess with
+// the full approximation scheme's coarse correction (ImplicitParams::fas); --duration S timed run (default 2); --settle-time S (default 10; 0 = no settled shape, no reference); --explicit-budget S
 // wall seconds an explicit run may take before it is timed over a short interval only (default 60);
 // --explicit-short S that interval (default 0.05); --explicit-settle-budget S wall seconds the explicit settle run
 // may take (default 300; over it the explicit settled shape is not measured); --newton-max-n N static Eigen reference up to N (default 64: its sparse LDLT takes ~2.5 s per
@@ -54,7 +55,7 @@ double number(const char* flag, const char* text, double lo, double hi) {
 int main(int argc, char** argv) {
     if (argc < 2 || std::strcmp(argv[1], "--help") == 0) {
         std::fprintf(stderr, "usage: drape_implicit realtime|convergence|throughput|rest [--n N,..] [--threads T] [--json] "
-                             "[--dt S] [--iterations K] [--rho R] [--strain-limit R] [--single-level] [--duration S] [--settle-time S] "
+                             "[--dt S] [--iterations K] [--rho R] [--strain-limit R] [--single-level] [--fas] [--duration S] [--settle-time S] "
                              "[--explicit-budget S] [--explicit-settle-budget S] [--explicit-short S] [--newton-max-n N] [--newton-step-max-n N] [--newton-iterations K] [--ref-iterations K] [--ref-steps S] [--ref-drag D] "
                              "[--kmax K] [--csv FILE | --out DIR] [--json-out FILE]\n");
         return 2;
@@ -102,6 +103,7 @@ int main(int argc, char** argv) {
             opt.ref_iterations = static_cast<std::uint32_t>(number("--ref-iterations", value(), 1, 1000));
         else if (s == "--kmax") opt.kmax = static_cast<std::uint32_t>(number("--kmax", value(), 1, 1000));
         else if (s == "--single-level") opt.multilevel = false;
+        else if (s == "--fas") opt.fas = true;
         else if (s == "--csv") opt.csv = value();
         else if (s == "--json-out") opt.json_out = value();
         else if (s == "--out") opt.out_dir = value();

@@ -23,6 +23,9 @@ struct CoarseLevel {
     std::vector<float> inv_mass;      ///< this step's: 0 where the nearest particle of the cloth is fixed
     std::vector<float> free_inv_mass; ///< the level's own masses
     std::vector<std::uint32_t> nearest; ///< per node: the nearest particle of the cloth (pins, grabs)
+    std::vector<float> rx, ry, rz;    ///< the cloth's force residual at x^n restricted onto this level (N)
+    std::vector<float> tx, ty, tz;    ///< scratch: this level's own residual at x^n
+    std::vector<float> rest0, rest;   ///< per Cloth::edges entry: the natural rest length and this step's
 };
 
 struct ImplicitSolver {
@@ -30,6 +33,8 @@ struct ImplicitSolver {
     std::vector<CoarseLevel> coarse; ///< finer first
     std::uint32_t columns = 0, rows = 0; ///< the cloth's grid (when it has coarse levels)
     std::vector<float> corr_x, corr_y, corr_z; ///< the finest coarse level's correction, sampled onto the cloth
+    std::vector<float> res_x, res_y, res_z;    ///< the cloth's force residual at x^n (N); then gradient scratch
+    std::vector<double> block_dot;             ///< per block of particles: a partial dot product
 };
 
 } // namespace drape

@@ -75,6 +75,28 @@ void resample(const float* src, const float* base, std::uint32_t sc, std::uint32
     });
 }
 
+/// The transpose of resample (no base): out (sc x sr) = the sum over the nodes of a (tc x tr) grid of each node's
+/// value times the bilinear weight its sample gives each node of out. Serial, in node order.
+void restrict_to(const float* src, std::uint32_t tc, std::uint32_t tr, float* out, std::uint32_t sc, std::uint32_t sr) {
+    std::fill(out, out + std::size_t(sc) * sr, 0.0f);
+    for (std::uint32_t j = 0; j < tr; ++j) {
+        const float fj = map_node(j, tr, sr);
+        const std::uint32_t j0 = std::min(static_cast<std::uint32_t>(fj), sr - 2);
+        const float t = fj - float(j0);
+        for (std::uint32_t i = 0; i < tc; ++i) {
+            const float fi = map_node(i, tc, sc);
+            const std::uint32_t i0 = std::min(static_cast<std::uint32_t>(fi), sc - 2);
+            const float s = fi - float(i0);
+            const float v = src[std::size_t(j) * tc + i];
+            const std::size_t k = std::size_t(j0) * sc + i0;
+            out[k] += v * (1.0f - s) * (1.0f - t);
+            out[k + 1] += v * s * (1.0f - t);
+            out[k + sc] += v * (1.0f - s) * t;
+            out[k + sc + 1] += v * s * t;
+        }
+    }
+}
+
 } // namespace
 
 void Simulation::cook_implicit() {
@@ -94,8 +116,11 @@ void Simulation::cook_implicit() {
             level.solver.cook(level.cloth);
             const std::size_t count = level.cloth.particle_count;
             for (std::vector<float>* a : {&level.x0, &level.y0, &level.z0, &level.vx, &level.vy, &level.vz, &level.gx,
-                                          &level.gy, &level.gz, &level.x, &level.y, &level.z, &level.inv_mass})
+                                          &level.gy, &level.gz, &level.x, &level.y, &level.z, &level.inv_mass,
+                                          &level.rx, &level.ry, &level.rz, &level.tx, &level.ty, &level.tz})
                 a->assign(count, 0.0f);
+            for (const Edge& e : level.cloth.edges) level.rest0.push_back(e.rest);
+            level.rest = level.rest0;
             level.free_inv_mass = level.cloth.free_inv_mass.size() == count
                                       ? level.cloth.free_inv_mass
                                       : std::vector<float>(level.cloth.inv_mass.begin(),
@@ -109,8 +134,10 @@ void Simulation::cook_implicit() {
                         static_cast<std::uint32_t>(std::lround(map_node(i, n, fc)));
             solver->coarse.push_back(std::move(level));
         }
-        for (std::vector<float>* a : {&solver->corr_x, &solver->corr_y, &solver->corr_z})
+        for (std::vector<float>* a : {&solver->corr_x, &solver->corr_y, &solver->corr_z, &solver->res_x,
+                                      &solver->res_y, &solver->res_z})
             a->assign(cloth_.particle_count, 0.0f);
+        solver->block_dot.assign(cloth_.block_count(), 0.0);
     }
     implicit_ = std::move(solver);
 }
@@ -128,6 +155,37 @@ template <bool Parallel> void Simulation::multilevel_guess() {
     const bool wind = params_.wind.enabled;
     const float wind_x = params_.wind.strength * static_cast<float>(std::sin(10.0 * t));
     const float wind_phase = static_cast<float>(std::fmod(10.0 * t + cloth_.origin[2], 2.0 * M_PI));
+    const bool fas = params_.implicit.fas;
+    if (fas) {
+        // The cloth's force residual at x^n (grad E - M a_ext: zero at rest), restricted level by level.
+        float* rx = is.res_x.data();
+        float* ry = is.res_y.data();
+        float* rz = is.res_z.data();
+        is.fine.gradient<Parallel>({a.x.data(), a.y.data(), a.z.data(), const_cast<float*>(a.x.data()),
+                                    const_cast<float*>(a.y.data()), const_cast<float*>(a.z.data()),
+                                    cloth_.inv_mass.data(), params_.colliders},
+                                   h, params_.air_drag, rx, ry, rz);
+        const std::size_t n = cloth_.particle_count;
+        for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
+            for (std::size_t i = blk * block_particles, end = std::min(n, (blk + 1) * block_particles); i < end; ++i) {
+                if (cloth_.inv_mass[i] == 0.0f) continue;
+                const float mh = 1.0f / (cloth_.inv_mass[i] * h);
+                rx[i] += mh * a.u[i];
+                ry[i] += mh * a.v[i];
+                rz[i] += mh * a.w[i];
+            }
+        });
+        for (std::size_t l = 0; l < is.coarse.size(); ++l) {
+            CoarseLevel& L = is.coarse[l];
+            const std::uint32_t tc = l == 0 ? fc : is.coarse[l - 1].columns, tr = l == 0 ? fr : is.coarse[l - 1].rows;
+            const float* sx = l == 0 ? rx : is.coarse[l - 1].rx.data();
+            const float* sy = l == 0 ? ry : is.coarse[l - 1].ry.data();
+            const float* sz = l == 0 ? rz : is.coarse[l - 1].rz.data();
+            restrict_to(sx, tc, tr, L.rx.data(), L.columns, L.rows);
+            restrict_to(sy, tc, tr, L.ry.data(), L.columns, L.rows);
+            restrict_to(sz, tc, tr, L.rz.data(), L.columns, L.rows);
+        }
+    }
     for (std::size_t l = is.coarse.size(); l-- > 0;) {
         CoarseLevel& L = is.coarse[l];
         const std::uint32_t n = L.columns;
@@ -177,6 +235,27 @@ template <bool Parallel> void Simulation::multilevel_guess() {
                 L.z[k] += L.gz[k];
             }
         });
+        if (fas) {
+            // Springs compressed at x^n are slack (no buckling saddles), then the level's own residual at x^n.
+            const std::vector<Edge>& edges = L.cloth.edges;
+            for (std::size_t e = 0; e < edges.size(); ++e) {
+                const std::uint32_t i = edges[e].a, j = edges[e].b;
+                const float dx = L.x0[j] - L.x0[i], dy = L.y0[j] - L.y0[i], dz = L.z0[j] - L.z0[i];
+                L.rest[e] = std::min(L.rest0[e], std::sqrt(dx * dx + dy * dy + dz * dz));
+            }
+            L.solver.set_spring_rest(L.rest);
+            L.solver.gradient<false>({L.x0.data(), L.y0.data(), L.z0.data(), L.x0.data(), L.y0.data(), L.z0.data(),
+                                      L.inv_mass.data(), params_.colliders},
+                                     h, params_.air_drag, L.tx.data(), L.ty.data(), L.tz.data());
+            // G - tau . x with tau = (the level's residual) - (the cloth's, restricted): folded into the prediction.
+            for (std::size_t k = 0; k < count; ++k) {
+                const float w = L.inv_mass[k];
+                if (w == 0.0f) continue;
+                px[k] += h2 * w * (L.tx[k] - L.rx[k]) + h * L.vx[k];
+                py[k] += h2 * w * (L.ty[k] - L.ry[k]) + h * L.vy[k];
+                pz[k] += h2 * w * (L.tz[k] - L.rz[k]) + h * L.vz[k];
+            }
+        }
         // A level has a quarter of the particles of the next finer one: twice its sweeps cost half as much.
         ImplicitParams level_params = params_.implicit;
         const std::uint32_t k = params_.implicit.iterations;
@@ -194,14 +273,43 @@ template <bool Parallel> void Simulation::multilevel_guess() {
     resample<Parallel>(C.y.data(), C.gy.data(), C.columns, C.rows, cy, fc, fr);
     resample<Parallel>(C.z.data(), C.gz.data(), C.columns, C.rows, cz, fc, fr);
     const std::size_t n = cloth_.particle_count;
-    for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
-        for (std::size_t i = blk * block_particles, end = std::min(n, (blk + 1) * block_particles); i < end; ++i) {
-            if (cloth_.inv_mass[i] == 0.0f) continue;
-            b.x[i] += cx[i];
-            b.y[i] += cy[i];
-            b.z[i] += cz[i];
-        }
-    });
+    auto add = [&](float scale) {
+        for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
+            for (std::size_t i = blk * block_particles, end = std::min(n, (blk + 1) * block_particles); i < end; ++i) {
+                if (cloth_.inv_mass[i] == 0.0f) continue;
+                b.x[i] += scale * cx[i];
+                b.y[i] += scale * cy[i];
+                b.z[i] += scale * cz[i];
+            }
+        });
+    };
+    if (!fas) {
+        add(1.0f);
+        return;
+    }
+    // The slope of the cloth's G along the correction c at the guess and at guess + c; secant step in [0, 1].
+    auto slope = [&]() {
+        is.fine.gradient<Parallel>({a.x.data(), a.y.data(), a.z.data(), b.x.data(), b.y.data(), b.z.data(),
+                                    cloth_.inv_mass.data(), params_.colliders},
+                                   h, params_.air_drag, is.res_x.data(), is.res_y.data(), is.res_z.data());
+        for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
+            double d = 0.0;
+            for (std::size_t i = blk * block_particles, end = std::min(n, (blk + 1) * block_particles); i < end; ++i)
+                d += double(is.res_x[i]) * cx[i] + double(is.res_y[i]) * cy[i] + double(is.res_z[i]) * cz[i];
+            is.block_dot[blk] = d;
+        });
+        double d = 0.0;
+        for (double v : is.block_dot) d += v;
+        return d;
+    };
+    const double d0 = slope();
+    add(1.0f);
+    if (d0 >= 0.0) { // not a descent direction
+        add(-1.0f);
+        return;
+    }
+    const double d1 = slope();
+    if (d1 > 0.0) add(static_cast<float>(d0 / (d0 - d1)) - 1.0f);
 }
 
 template <bool Parallel> void Simulation::implicit_step() {

@@ -502,6 +502,26 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     return stats;
 }
 
+template <bool Parallel>
+void Solver::gradient(const LevelState& st, float h, float air_drag, float* gx, float* gy, float* gz) const {
+    const std::size_t n = graph_.particle_count;
+    const float inv_h = 1.0f / h;
+    const SweepArgs args{st.x0,       st.y0,    st.z0,         pred_x_.data(),   pred_y_.data(), pred_z_.data(),
+                         st.x,        st.y,     st.z,          st.inv_mass,      &graph_,        inv_h * inv_h,
+                         air_drag * inv_h, inv_h};
+    for_each_index<Parallel>((n + block_particles - 1) / block_particles, [&](std::size_t blk) {
+        for (std::size_t i = blk * block_particles, end = std::min(n, (blk + 1) * block_particles); i < end; ++i) {
+            float g[3] = {0.0f, 0.0f, 0.0f};
+            if (st.inv_mass[i] != 0.0f) solve_vertex<true>(args, static_cast<std::uint32_t>(i), g);
+            gx[i] = g[0];
+            gy[i] = g[1];
+            gz[i] = g[2];
+        }
+    });
+}
+
+template void Solver::gradient<true>(const LevelState&, float, float, float*, float*, float*) const;
+template void Solver::gradient<false>(const LevelState&, float, float, float*, float*, float*) const;
 template ImplicitStats Solver::run<true>(const LevelState&, const ImplicitParams&, float, float);
 template ImplicitStats Solver::run<false>(const LevelState&, const ImplicitParams&, float, float);
 

@@ -80,6 +80,10 @@ class Solver {
     /// Runs the sweeps of one step of length h with air drag kr (1/s). No allocation.
     template <bool Parallel>
     ImplicitStats run(const LevelState& s, const ImplicitParams& params, float h, float air_drag);
+    /// The gradient of the step's objective G at s.x (N per vertex; 0 at fixed vertices), on the prediction filled
+    /// in; no step taken. No allocation.
+    template <bool Parallel>
+    void gradient(const LevelState& s, float h, float air_drag, float* gx, float* gy, float* gz) const;
 
   private:
     VbdGraph graph_;
@@ -111,7 +115,9 @@ struct SweepArgs {
     float inv_h;       ///< 1 / h
 };
 
-/// The local Newton step of vertex i (movable): writes the new position and returns |g_i|^2 (N^2).
+/// The local Newton step of vertex i (movable): writes the new position and returns |g_i|^2 (N^2). GradientOnly:
+/// writes g_i (the gradient of G at the iterate, N) instead and takes no step.
+template <bool GradientOnly = false>
 inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noexcept {
     const VbdGraph& g = *a.graph;
     const float xi = a.x[i], yi = a.y[i], zi = a.z[i];
@@ -209,6 +215,12 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
     gx += sgx;
     gy += sgy;
     gz += sgz;
+    if constexpr (GradientOnly) {
+        out[0] = gx;
+        out[1] = gy;
+        out[2] = gz;
+        return gx * gx + gy * gy + gz * gz;
+    }
     // x_i -= H^-1 g by the adjugate (H is symmetric positive definite: the inertia term alone is m/h^2 I).
     const float c00 = hyy * hzz - hyz * hyz, c01 = hxz * hyz - hxy * hzz, c02 = hxy * hyz - hxz * hyy;
     const float c11 = hxx * hzz - hxz * hxz, c12 = hxy * hxz - hxx * hyz, c22 = hxx * hyy - hxy * hxy;

@@ -46,6 +46,10 @@ struct ImplicitParams {
     /// On a grid cloth of the fabric model: start each step from the same step solved on coarser grids of the same
     /// fabric (coarsest first, each level's displacement interpolated onto the next as its initial guess).
     bool multilevel = true;
+    /// With the multilevel guess: each coarse level solves its step with the cloth's own force residual at x^n
+    /// (a full approximation scheme, docs/implicit.md "Coarse correction"), so a cloth at rest stays at rest and comes
+    /// to rest at the cloth's own equilibrium rather than the coarse grids'. Off: each level solves its own step.
+    bool fas = false;
 };
 
 /// Figures of the last implicit step.
