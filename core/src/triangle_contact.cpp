@@ -77,7 +77,7 @@ template <class F> std::array<double, 3> lattice_minimum(F&& f, int m) noexcept 
     std::array<double, 3> best{1.0, 0.0, 0.0};
     double fbest = std::numeric_limits<double>::max();
     for (int i = 0; i <= m; ++i)
-        for (int j = 0; i + j <= m; ++j) {
+        for (int j = 0; j <= m - i; ++j) {
             const double s = double(i) / m, w = double(j) / m, v = f(s, w);
             if (v < fbest) fbest = v, best = {1.0 - s - w, s, w};
         }
