@@ -7,6 +7,7 @@
 #include <cstdlib>
 
 #include "drape/colliders.hpp"
+#include "drape/garment_figures.hpp"
 #include "drape/panels.hpp"
 #include "drape/scene.hpp"
 #include "drape/simulation.hpp"
@@ -16,56 +17,6 @@
 using namespace drape;
 
 namespace {
-
-struct ShirtFigures {
-    std::size_t worst = 0;      ///< particle of the largest mirror error
-    double longest_seam = 0.0;  ///< m
-    double mirror_error = 0.0;  ///< m, max over particles of |p_i - mirror(p_mirror(i))|
-    std::size_t inside = 0;     ///< particles inside a body collider
-    bool finite = false;
-};
-
-// The particle that is the mirror image (x -> -x) of each particle: column c <-> 2m - c of the same panel.
-std::vector<std::uint32_t> mirror_map(const TShirtParams& p) {
-    const TShirtBuild t = build_tshirt(p);
-    std::vector<std::uint32_t> map(t.assembly.particle_count());
-    for (const MaskPanelBuild* panel : {&t.front, &t.back})
-        for (std::int64_t r = 0; r < panel->rows; ++r)
-            for (std::int64_t c = 0; c < panel->columns; ++c) {
-                const std::int32_t i = panel->particle_at(r, c);
-                if (i < 0) continue;
-                const std::int32_t j = panel->particle_at(r, panel->columns - 1 - c);
-                EXPECT_GE(j, 0);
-                map[static_cast<std::size_t>(i)] = static_cast<std::uint32_t>(j);
-            }
-    return map;
-}
-
-ShirtFigures measure(const Simulation& sim, const std::vector<std::uint32_t>& mirror) {
-    ShirtFigures f;
-    f.finite = sim.health().finite;
-    const auto x = sim.x(), y = sim.y(), z = sim.z();
-    const std::array<double, 3> o = sim.cloth().origin;
-    const SeamSet& s = sim.cloth().seams;
-    for (std::size_t k = 0; k < s.a.size(); ++k) {
-        const double dx = x[s.b[k]] - x[s.a[k]], dy = y[s.b[k]] - y[s.a[k]], dz = z[s.b[k]] - z[s.a[k]];
-        f.longest_seam = std::max(f.longest_seam, std::sqrt(dx * dx + dy * dy + dz * dz));
-    }
-    for (std::size_t i = 0; i < sim.cloth().particle_count; ++i) {
-        const std::size_t j = mirror[i];
-        const double dx = (x[i] + o[0]) + (x[j] + o[0]), dy = y[i] - y[j], dz = z[i] - z[j];
-        if (std::sqrt(dx * dx + dy * dy + dz * dz) > f.mirror_error) {
-            f.mirror_error = std::sqrt(dx * dx + dy * dy + dz * dz);
-            f.worst = i;
-        }
-        for (const Collider& c : sim.params().colliders)
-            if (c.kind != ColliderKind::plane && is_inside(c, {x[i], y[i], z[i]}, 1e-5f)) {
-                ++f.inside;
-                break;
-            }
-    }
-    return f;
-}
 
 // Fewest triangles of the cloth meeting any body collider (triangle_contact.hpp's exact test).
 std::size_t triangles_in_body(const Simulation& sim) {
@@ -78,9 +29,6 @@ std::size_t triangles_in_body(const Simulation& sim) {
         for (const Collider& col : sim.params().colliders)
             if (col.kind != ColliderKind::plane && triangle_meets_collider(col, a, b, c)) {
                 ++count;
-                if (std::getenv("DRAPE_SHIRT_TRIS"))
-                    std::printf("tri %zu collider %d at %.3f %.3f %.3f\n", t / 3, int(&col - sim.params().colliders.data()),
-                                a[0] + sim.cloth().origin[0], a[1] + sim.cloth().origin[1], a[2] + sim.cloth().origin[2]);
                 break;
             }
     }
@@ -92,14 +40,14 @@ std::size_t triangles_in_body(const Simulation& sim) {
 TEST(TShirtSewn, ClosesEverySeamSymmetricallyOutsideTheBody) {
     const SceneSpec spec = load_scene("tshirt");
     ASSERT_GT(spec.physics.sewing_speed, 0.0f);
-    const std::vector<std::uint32_t> mirror = mirror_map(spec.tshirt);
+    const std::vector<std::uint32_t> mirror = tshirt_mirror_map(spec.tshirt);
     BuiltScene b = build_scene(spec);
     Simulation sim(std::move(b.cloth), b.initial, b.params);
-    const ShirtFigures start = measure(sim, mirror);
+    const GarmentFigures start = garment_figures(sim, mirror);
     EXPECT_NEAR(start.longest_seam, 0.26, 1e-3) << "the panels start a gap apart";
     EXPECT_LT(start.mirror_error, 1e-6);
     sim.step(static_cast<std::size_t>(2.5 / sim.params().dt));
-    const ShirtFigures f = measure(sim, mirror);
+    const GarmentFigures f = garment_figures(sim, mirror);
     ASSERT_TRUE(f.finite);
     const float thickness = 0.005f; // the body's collision margin: the cloth's thickness against it
     const float seam_rest = spec.tshirt.seam_rest_ratio / spec.tshirt.cells_per_metre;
@@ -229,38 +177,6 @@ TEST(TShirtSewn, HemDraggedThirtyCentimetresAndReleasedStaysOn) {
         EXPECT_EQ(r->in_body, 0u) << "triangles through the body";
     }
     EXPECT_LT(sim.z()[hem], p0[2] + 0.1f) << "the hem did not fall back";
-}
-
-TEST(TShirtSewn, DISABLED_Probe) {
-    const char* env = std::getenv("DRAPE_SHIRT_CPM");
-    SceneSpec spec = load_scene("tshirt");
-    if (env) spec.tshirt.cells_per_metre = float(std::atof(env));
-    if (std::getenv("DRAPE_SHIRT_NOLIMIT")) spec.physics.strain_limit.ratio = 0.0f;
-    if (const char* r = std::getenv("DRAPE_SHIRT_LIMIT")) spec.physics.strain_limit.ratio = float(std::atof(r));
-    if (const char* r = std::getenv("DRAPE_SHIRT_SEAM")) spec.tshirt.seam_rest_ratio = float(std::atof(r));
-    if (const char* v = std::getenv("DRAPE_SHIRT_SEW")) spec.physics.sewing_speed = float(std::atof(v));
-    if (std::getenv("DRAPE_SHIRT_IMPLICIT")) spec.physics.solver = Solver::implicit;
-    const std::vector<std::uint32_t> mirror = mirror_map(spec.tshirt);
-    BuiltScene b = build_scene(spec);
-    Simulation sim(std::move(b.cloth), b.initial, b.params);
-    std::printf("particles %zu dt %g\n", sim.cloth().particle_count, double(sim.params().dt));
-    {
-        const ShirtFigures f = measure(sim, mirror);
-        std::printf("t 0 seam %.4f mirror %.4f inside %zu\n", f.longest_seam, f.mirror_error, f.inside);
-    }
-    if (std::getenv("DRAPE_SHIRT_EARLY"))
-        for (std::size_t n : {1, 1, 1, 7, 10, 30, 50, 100, 300}) {
-            sim.step(n);
-            const ShirtFigures f = measure(sim, mirror);
-            std::printf("substep+%zu seam %.4f mirror %.3g\n", n, f.longest_seam, f.mirror_error);
-        }
-    const double seconds = std::getenv("DRAPE_SHIRT_T") ? std::atof(std::getenv("DRAPE_SHIRT_T")) : 3.0;
-    for (int k = 0; k < 12; ++k) {
-        sim.step(static_cast<std::size_t>(seconds / 12 / sim.params().dt));
-        const ShirtFigures f = measure(sim, mirror);
-        std::printf("t %.3f seam %.4f mirror %.3g at %zu (%.3f %.3f %.3f) inside %zu finite %d\n", (k + 1) * seconds / 12, f.longest_seam,
-                    f.mirror_error, f.worst, sim.x()[f.worst] + sim.cloth().origin[0], sim.y()[f.worst] + sim.cloth().origin[1], sim.z()[f.worst] + sim.cloth().origin[2], f.inside, int(f.finite));
-    }
 }
 
 } // namespace

@@ -1,0 +1,57 @@
+// Figures of a sewn symmetric garment (garment_figures.hpp).
+#include "drape/garment_figures.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "drape/colliders.hpp"
+#include "drape/errors.hpp"
+
+namespace drape {
+
+std::vector<std::uint32_t> tshirt_mirror_map(const TShirtParams& params) {
+    const TShirtBuild t = build_tshirt(params);
+    std::vector<std::uint32_t> map(t.assembly.particle_count());
+    for (const MaskPanelBuild* panel : {&t.front, &t.back})
+        for (std::int64_t r = 0; r < panel->rows; ++r)
+            for (std::int64_t c = 0; c < panel->columns; ++c) {
+                const std::int32_t i = panel->particle_at(r, c);
+                if (i < 0) continue;
+                const std::int32_t j = panel->particle_at(r, panel->columns - 1 - c);
+                if (j < 0)
+                    throw InvalidInput("tshirt_mirror_map: the mask is not left-right symmetric: row " +
+                                       std::to_string(r) + ", column " + std::to_string(c) + " has a particle, column " +
+                                       std::to_string(panel->columns - 1 - c) + " none");
+                map[static_cast<std::size_t>(i)] = static_cast<std::uint32_t>(j);
+            }
+    return map;
+}
+
+GarmentFigures garment_figures(const Simulation& sim, std::span<const std::uint32_t> mirror) {
+    GarmentFigures f;
+    f.finite = sim.health().finite;
+    const auto x = sim.x(), y = sim.y(), z = sim.z();
+    const std::array<double, 3> o = sim.cloth().origin;
+    const SeamSet& s = sim.cloth().seams;
+    for (std::size_t k = 0; k < s.a.size(); ++k) {
+        const double dx = x[s.b[k]] - x[s.a[k]], dy = y[s.b[k]] - y[s.a[k]], dz = z[s.b[k]] - z[s.a[k]];
+        f.longest_seam = std::max(f.longest_seam, std::sqrt(dx * dx + dy * dy + dz * dz));
+    }
+    for (std::size_t i = 0; i < sim.cloth().particle_count && i < mirror.size(); ++i) {
+        const std::size_t j = mirror[i];
+        const double dx = (x[i] + o[0]) + (x[j] + o[0]), dy = y[i] - y[j], dz = z[i] - z[j];
+        const double e = std::sqrt(dx * dx + dy * dy + dz * dz);
+        if (e > f.mirror_error) {
+            f.mirror_error = e;
+            f.worst = i;
+        }
+        for (const Collider& c : sim.params().colliders)
+            if (c.kind != ColliderKind::plane && is_inside(c, {x[i], y[i], z[i]}, 1e-5f)) {
+                ++f.inside;
+                break;
+            }
+    }
+    return f;
+}
+
+} // namespace drape
