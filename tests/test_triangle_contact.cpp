@@ -168,8 +168,10 @@ INSTANTIATE_TEST_SUITE_P(Sizes, TriangleContactDrop,
                          ::testing::Values(DropCase{2, Solver::explicit_euler}, DropCase{2, Solver::implicit},
                                            DropCase{64, Solver::implicit}),
                          [](const auto& info) {
-                             return "n" + std::to_string(info.param.n) +
-                                    (info.param.solver == Solver::implicit ? "_implicit" : "_explicit");
+                             std::string name = "n";
+                             name += std::to_string(info.param.n);
+                             name += info.param.solver == Solver::implicit ? "_implicit" : "_explicit";
+                             return name;
                          });
 
 } // namespace

@@ -50,9 +50,7 @@ Health Simulation::health() const {
         const float rest = edge_rest_.empty() ? e.rest : edge_rest_[k]; // a seam being sewn: its current rest
         const float dx = s.x[e.b] - s.x[e.a], dy = s.y[e.b] - s.y[e.a], dz = s.z[e.b] - s.z[e.a];
         const float signed_strain = (std::sqrt(dx * dx + dy * dy + dz * dz) - rest) / rest;
-        // The springs the limit acts on: structural, seam and (explicit solver only, strain_limit.cpp) shear.
-        if (e.kind != SpringKind::shear || params_.solver != Solver::implicit)
-            if (!(signed_strain <= max_stretch)) max_stretch = signed_strain;
+        if (strain_limited(e.kind) && !(signed_strain <= max_stretch)) max_stretch = signed_strain;
         if (e.kind != SpringKind::structural) continue;
         const float strain = std::fabs(signed_strain);
         if (!(strain <= max_strain)) max_strain = strain; // NaN propagates as the maximum

@@ -211,7 +211,7 @@ template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, b
     // explicit solver's form runs (a drag out of the cloth's reach: the one-sided form put its whole excess into the
     // spring next to the grab; the mass-weighted form without shear springs and velocities let the stretch creep up
     // over 20 steps of the NoAllocation grab at N = 48; the full explicit form holds there, as it always did).
-    const bool frame_form = params_.solver == Solver::implicit && grabbed_ == SIZE_MAX;
+    const bool frame_form = strain_limit_frame_form();
     LimitArgs c{out.x.data(), out.y.data(), out.z.data(), out.u.data(), out.v.data(), out.w.data(),
                 cloth_.inv_mass.data(), limit_a_.data(), limit_b_.data(), limit_rest_.data(),
                 frame_form ? limit_inner_.data() : nullptr, frame_form, 1.0f + sl.ratio, 1.0f + 1.05f * sl.ratio,

@@ -268,6 +268,13 @@ class Simulation {
     ColourGroups limit_groups_;
     std::vector<std::uint8_t> limit_serial_; ///< per group: 1 = overflow group, run serially
     std::vector<std::uint32_t> limit_a_, limit_b_;
+    /// The strain limit's form for frame-long steps (implicit solver, no grab held; strain_limit.cpp) and the springs
+    /// it acts on: structural and seam springs always, shear springs only in the explicit solver's form. The limit
+    /// and the health figures (max_limited_stretch) both ask here.
+    bool strain_limit_frame_form() const noexcept { return params_.solver == Solver::implicit && grabbed_ == SIZE_MAX; }
+    bool strain_limited(SpringKind kind) const noexcept {
+        return kind != SpringKind::bend && (kind != SpringKind::shear || !strain_limit_frame_form());
+    }
     /// Per limited spring, flags for the implicit solver's limit (core/src/strain_limit.cpp): which end is nearer the
     /// fixed particles (it moves only the far end), and whether it is a shear spring (not limited there).
     std::vector<std::uint8_t> limit_inner_;
