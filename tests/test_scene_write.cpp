@@ -291,10 +291,55 @@ TEST(SceneWrite, SavedStateContinuesBitIdentically) {
         SceneSpec s = spec;
         // The analytic wind depends on the time, which restarts at 0 on load (documented): off here; aero stays.
         s.physics.wind.enabled = false;
-        // So does self-collision's schedule (its last run's snapshot is not saved, documented): off here.
-        s.physics.self_collision.thickness = 0.0f;
         expect_continues_identically(s, name, 150, 200);
     }
+}
+
+// Self-collision's snapshot of its last run (which decides when the stage runs and each pair's side) is saved with
+// the state: a resumed run continues bit-identically; without it the resumed run differs. The scene: a 24 x 24 wool
+// cloth folded over itself on the ground (test_self_collision.cpp's pile), 4 mm thickness.
+TEST(SceneWrite, SelfCollisionSnapshotIsSavedAndResumed) {
+    SceneSpec spec = load_scene("hang");
+    const std::uint32_t n = 24;
+    spec.grid.n = n;
+    spec.grid.size = 0.5f;
+    spec.grid.pins = GridPins::none;
+    spec.physics.strain_limit.ratio = 0.0f;
+    spec.physics.colliders = {make_ground(0.0f, {0.002f, 0.5f})};
+    spec.physics.self_collision.thickness = 0.004f;
+    spec.physics.self_collision.friction = 0.3f;
+    const BuiltScene flat = build_scene(spec);
+    SceneState fold;
+    fold.origin = flat.cloth.origin;
+    const float h = spec.grid.size / float(n - 1), yb = 0.004f;
+    for (std::uint32_t j = 0; j < n; ++j)
+        for (std::uint32_t i = 0; i < n; ++i) { // grid_index order: row j, column i
+            const float wave = 0.3f * h * std::sin(0.7f * float(j)) * std::sin(0.9f * float(i) - 0.9f * float(n / 2));
+            const bool top = i >= n / 2; // folded back over the bottom half
+            fold.x.push_back(top ? float(n - 1 - i) * h + 0.3f * h : float(i) * h);
+            fold.y.push_back(top ? yb + h + wave : yb);
+            fold.z.push_back(top ? float(j) * h + 0.3f * h : float(j) * h);
+        }
+    fold.vx.assign(fold.x.size(), 0.0f);
+    fold.vy = fold.vx;
+    fold.vz = fold.vx;
+    spec.state = fold;
+    expect_continues_identically(spec, "folded pile with self-collision", 150, 200);
+
+    BuiltScene b = build_scene(spec);
+    Simulation original(std::move(b.cloth), b.initial, b.params);
+    original.step(300);
+    SceneState state = capture_state(original);
+    ASSERT_EQ(state.snapshot_x.size(), original.cloth().particle_count) << "the stage ran, so it has a snapshot";
+    state.snapshot_x.clear();
+    state.snapshot_y.clear();
+    state.snapshot_z.clear();
+    spec.state = state;
+    BuiltScene r = build_scene(spec);
+    Simulation resumed(std::move(r.cloth), r.initial, r.params);
+    original.step(200);
+    resumed.step(200);
+    EXPECT_NE(resumed.checksum(), original.checksum()) << "without the snapshot the stage runs at once: not the same";
 }
 
 TEST(SceneWrite, UserPinsAndUnpinsAreSaved) {

@@ -777,6 +777,12 @@ SceneState read_state(ObjectReader& st) {
                     "must be a particle index in [0, " + std::to_string(out.x.size()) + ")");
         out.pinned.push_back(v.get<std::uint32_t>());
     }
+    if (st.has("self_collision_snapshot")) {
+        triples("self_collision_snapshot", out.snapshot_x, out.snapshot_y, out.snapshot_z, " m");
+        if (out.snapshot_x.size() != out.x.size())
+            st.fail(st.at("self_collision_snapshot"), "has " + std::to_string(out.snapshot_x.size()) +
+                                                          " entries; state.positions has " + std::to_string(out.x.size()));
+    }
     if (const json* sewn = st.array("seam_rest", max_particles))
         for (std::size_t k = 0; k < sewn->size(); ++k) {
             const json& v = (*sewn)[k];
@@ -1326,6 +1332,15 @@ void apply_state(const SceneState& st, BuiltScene& out) {
         throw InvalidInput("state.seam_rest has " + std::to_string(st.seam_rest.size()) + " entries but the cloth has " +
                            std::to_string(c.seams.a.size()) + " seams");
     out.initial.seam_rest = st.seam_rest;
+    out.initial.snapshot_x = st.snapshot_x;
+    out.initial.snapshot_y = st.snapshot_y;
+    out.initial.snapshot_z = st.snapshot_z;
+    if (shift != std::array<double, 3>{0.0, 0.0, 0.0})
+        for (std::size_t i = 0; i < st.snapshot_x.size(); ++i) {
+            out.initial.snapshot_x[i] = static_cast<float>(double(st.snapshot_x[i]) + shift[0]);
+            out.initial.snapshot_y[i] = static_cast<float>(double(st.snapshot_y[i]) + shift[1]);
+            out.initial.snapshot_z[i] = static_cast<float>(double(st.snapshot_z[i]) + shift[2]);
+        }
 }
 
 } // namespace

@@ -251,6 +251,10 @@ std::string state_json(const SceneState& st) {
         if (v->size() != n)
             throw InvalidInput("scene state: " + std::to_string(n) + " x positions but an array of " +
                                std::to_string(v->size()) + " entries");
+    for (const std::vector<float>* v : {&st.snapshot_x, &st.snapshot_y, &st.snapshot_z})
+        if (!v->empty() && v->size() != n)
+            throw InvalidInput("scene state: " + std::to_string(n) + " x positions but an array of " +
+                               std::to_string(v->size()) + " entries");
     char origin[128];
     std::snprintf(origin, sizeof origin, "[%.17g, %.17g, %.17g]", st.origin[0], st.origin[1], st.origin[2]);
     std::string out = "{\n    \"origin\": " + std::string(origin) + ",\n    \"positions\": [";
@@ -267,6 +271,13 @@ std::string state_json(const SceneState& st) {
         out += ",\n    \"seam_rest\": [";
         for (std::size_t k = 0; k < st.seam_rest.size(); ++k) out += (k ? ", " : "") + num(st.seam_rest[k]);
         out += "]";
+    }
+    if (!st.snapshot_x.empty()) {
+        out += ",\n    \"self_collision_snapshot\": [";
+        for (std::size_t i = 0; i < st.snapshot_x.size(); ++i)
+            out += std::string(i ? "," : "") + "\n      [" + num(st.snapshot_x[i]) + ", " + num(st.snapshot_y[i]) + ", " +
+                   num(st.snapshot_z[i]) + "]";
+        out += "\n    ]";
     }
     out += "\n  }";
     return out;
@@ -374,6 +385,10 @@ SceneState capture_state(const Simulation& sim) {
     }
     const std::span<const float> sewn = sim.seams_being_sewn();
     s.seam_rest.assign(sewn.begin(), sewn.end());
+    const std::array<std::span<const float>, 3> snap = sim.self_collision_snapshot();
+    s.snapshot_x.assign(snap[0].begin(), snap[0].end());
+    s.snapshot_y.assign(snap[1].begin(), snap[1].end());
+    s.snapshot_z.assign(snap[2].begin(), snap[2].end());
     return s;
 }
 

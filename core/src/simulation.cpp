@@ -133,6 +133,13 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
     if (!params_.colliders.empty()) cook_triangle_contact();
     if (params_.self_collision.thickness > 0.0f) cook_self_collision();
     if (params_.solver == Solver::implicit) cook_implicit();
+    if (!sc_snap_x_.empty() && initial.snapshot_x.size() == n && initial.snapshot_y.size() == n &&
+        initial.snapshot_z.size() == n) { // a saved run's snapshot: the stage continues as it would have
+        sc_snap_x_ = initial.snapshot_x;
+        sc_snap_y_ = initial.snapshot_y;
+        sc_snap_z_ = initial.snapshot_z;
+        sc_snap_step_ = 0;
+    }
 
     StateBuffer& s = buffers_[0];
     std::memcpy(s.x.data(), initial.x.data(), n * sizeof(float));

@@ -116,6 +116,9 @@ struct InitialState {
     /// Seams still being sewn (SimulationParams::sewing_speed): each seam's current rest length, in SeamSet order,
     /// m; empty = the seams start from their lengths in x, y, z (a saved state carries it, so sewing resumes).
     std::vector<float> seam_rest;
+    /// Self-collision's snapshot of its last run (positions after its pushes, relative to Cloth::origin): a saved
+    /// state carries it so a resumed run continues as it would have; empty = none (the stage runs in the first step).
+    std::vector<float> snapshot_x, snapshot_y, snapshot_z;
 };
 
 /// Rounds n up to whole SIMD batches.

@@ -99,6 +99,8 @@ struct SceneState {
     /// Seams being sewn when the state was saved: their current rest lengths, m (InitialState::seam_rest); empty
     /// when no seam is still closing.
     std::vector<float> seam_rest;
+    /// Self-collision's snapshot of its last run ("self_collision_snapshot", InitialState::snapshot_x); empty = none.
+    std::vector<float> snapshot_x, snapshot_y, snapshot_z;
 };
 
 /// Everything a scene file holds (cold tier). Defaults are those of "hang".

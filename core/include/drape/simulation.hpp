@@ -168,6 +168,14 @@ class Simulation {
         return sewing_ ? std::span<const float>(seam_rest_) : std::span<const float>();
     }
 
+    /// Self-collision's snapshot of its last run (x, y, z relative to the origin) while it is on and has one; empty
+    /// spans otherwise (InitialState::snapshot_x).
+    std::array<std::span<const float>, 3> self_collision_snapshot() const noexcept {
+        if (params_.self_collision.thickness <= 0.0f || sc_snap_step_ == SIZE_MAX || sc_snap_step_ > steps_done_)
+            return {};
+        return {std::span<const float>(sc_snap_x_), std::span<const float>(sc_snap_y_), std::span<const float>(sc_snap_z_)};
+    }
+
     /// The frame's origin (world coordinates, m): positions, colliders and grab targets are relative to it
     /// (Cloth::origin).
     const std::array<double, 3>& origin() const noexcept { return cloth_.origin; }
