@@ -11,6 +11,7 @@
 
 #include "drape/cloth.hpp"
 #include "drape/scene.hpp"
+#include "drape/simulation.hpp"
 
 namespace drape::app {
 
@@ -53,5 +54,10 @@ struct SolverFlags {
 /// keeps velocities); throws InvalidInput (exit code 2) naming the flag for --integrator verlet with the implicit
 /// solver, and for --iterations, --tolerance or --fas when the solver (the flag's or the scene's) is explicit.
 void apply_solver_flags(SceneSpec& spec, const SolverFlags& flags);
+
+/// A warning for the implicit solver on a cloth it solves on one grid only (no multilevel guess: meshes, garments,
+/// outlines, the springs model, non-square grids; 256 particles or more): such a cloth does not come to rest at
+/// ordinary sweep counts (docs/implicit.md). Empty when it does not apply. `drape run` and the viewer show it.
+std::string single_level_implicit_warning(const Simulation& sim);
 
 } // namespace drape::app

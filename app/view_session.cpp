@@ -461,6 +461,8 @@ void ViewSession::install(Built built, const Request& r) {
     publisher_ = std::move(built.publisher);
     sim_ = std::move(built.sim);
     restore(built.snap);
+    if (r.new_scene) single_level_warned_ = false;
+    warn_single_level_implicit();
     ++generation_;
     if (r.new_scene) ++scene_generation_;
     if (r.clears_error) {
@@ -617,7 +619,14 @@ bool ViewSession::try_set_params(const SimulationParams& p) {
         return false;
     }
     params_ = p;
+    warn_single_level_implicit();
     return true;
+}
+
+void ViewSession::warn_single_level_implicit() {
+    const std::string w = sim_ ? single_level_implicit_warning(*sim_) : std::string();
+    if (!w.empty() && !single_level_warned_) post(MessageLevel::warning, w);
+    single_level_warned_ = !w.empty();
 }
 
 std::shared_ptr<const ViewSession::KeepState> ViewSession::capture_state() {

@@ -369,6 +369,10 @@ class ViewSession {
     bool commit_params(const SimulationParams& p, const std::string& key);
     /// Sets the simulation's run parameters and keeps them (params_); a refusal is posted. No undo entry.
     bool try_set_params(const SimulationParams& p);
+    /// Posts single_level_implicit_warning (materials.hpp) once each time it starts to apply (a new cloth, or the
+    /// implicit solver chosen for one).
+    void warn_single_level_implicit();
+    bool single_level_warned_ = false;
     void refresh_pins();
     /// The settings of a scene as loaded, at `size` (throws InvalidInput for a size out of range).
     Snapshot settings_for(SceneSpec spec, std::optional<std::uint32_t> size);

@@ -18,6 +18,7 @@
 #include "drape/simulation.hpp"
 #include "drape/stability.hpp"
 #include "drape/workers.hpp"
+#include "materials.hpp"
 #include "vbd.hpp"
 
 using namespace drape;
@@ -429,4 +430,27 @@ TEST(Implicit, SimdSweepsMatchTheScalarReferenceBitForBit) {
     shirt.tshirt.cells_per_metre = 30;
     BuiltScene b = build_scene(shirt);
     compare(b.cloth, b.initial, b.params.colliders, false);
+}
+
+// drape run and the viewer warn when the implicit solver runs a cloth on one grid only (no multilevel guess: such a
+// cloth does not come to rest, docs/implicit.md): the T-shirt and a springs-model grid yes, a fabric grid no.
+TEST(Implicit, SingleLevelClothsAreWarnedAbout) {
+    auto warning = [](SceneSpec spec, Solver solver) {
+        spec.physics.solver = solver;
+        BuiltScene b = build_scene(spec);
+        const Simulation sim(std::move(b.cloth), b.initial, b.params);
+        return drape::app::single_level_implicit_warning(sim);
+    };
+    SceneSpec hang = load_scene("hang");
+    hang.grid.n = 32;
+    EXPECT_TRUE(warning(hang, Solver::implicit).empty()) << "a square fabric grid has coarse levels";
+    EXPECT_TRUE(warning(load_scene("tshirt"), Solver::explicit_euler).empty());
+    const std::string shirt = warning(load_scene("tshirt"), Solver::implicit);
+    EXPECT_NE(shirt.find("no multilevel guess"), std::string::npos) << shirt;
+    SceneSpec springs = hang;
+    springs.model = MaterialModel::springs;
+    springs.grid.model = MaterialModel::springs;
+    EXPECT_FALSE(warning(springs, Solver::implicit).empty()) << "the springs model has no coarse levels";
+    springs.grid.n = 10;
+    EXPECT_TRUE(warning(springs, Solver::implicit).empty()) << "100 particles: below the warning's 256";
 }

@@ -32,6 +32,11 @@ const VbdGraph& Simulation::vbd_graph() const noexcept {
     return implicit_ ? implicit_->fine.graph() : empty;
 }
 
+std::uint32_t Simulation::implicit_levels() const noexcept {
+    if (!implicit_) return 0;
+    return params_.implicit.multilevel ? static_cast<std::uint32_t>(1 + implicit_->coarse.size()) : 1;
+}
+
 namespace {
 
 /// Coarse levels stop below this many particles per side.
