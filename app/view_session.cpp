@@ -185,6 +185,8 @@ ViewSession::ViewSession(const std::string& scene, std::optional<std::uint32_t> 
     r.history = History::none;
     install(build(r.target, nullptr, false), r);
     message_ = {};
+    single_level_warned_ = false;
+    warn_single_level_implicit(); // the one message a start may show
     // An explicit --dt the cloth cannot take is refused (build() would quietly lower it).
     if (dt && params_.solver == Solver::explicit_euler && *dt > dt_bound_)
         throw InvalidInput("--dt: value " + fmt(*dt) + " s is above this cloth's explicit stability bound " +
