@@ -26,6 +26,7 @@ struct CoarseLevel {
     std::vector<float> rx, ry, rz;    ///< the cloth's force residual at x^n restricted onto this level (N)
     std::vector<float> tx, ty, tz;    ///< scratch: this level's own residual at x^n
     std::vector<float> rest0, rest;   ///< per Cloth::edges entry: the natural rest length and this step's
+    bool slack = false;               ///< the solver's springs hold `rest` (FAS), not `rest0`
 };
 
 struct ImplicitSolver {

@@ -249,10 +249,12 @@ template <bool Parallel> void Simulation::multilevel_guess() {
                 L.rest[e] = std::min(L.rest0[e], std::sqrt(dx * dx + dy * dy + dz * dz));
             }
             L.solver.set_spring_rest(L.rest);
+            L.slack = true;
             L.solver.gradient<false>({L.x0.data(), L.y0.data(), L.z0.data(), L.x0.data(), L.y0.data(), L.z0.data(),
                                       L.inv_mass.data(), params_.colliders},
                                      h, params_.air_drag, L.tx.data(), L.ty.data(), L.tz.data());
-            // G - tau . x with tau = (the level's residual) - (the cloth's, restricted): folded into the prediction.
+            // G - tau . x with tau = (the level's residual: its gradient at x^n plus M v^n / h) - (the cloth's,
+            // restricted), folded into the prediction as y + h^2 M^-1 tau.
             for (std::size_t k = 0; k < count; ++k) {
                 const float w = L.inv_mass[k];
                 if (w == 0.0f) continue;
@@ -260,6 +262,10 @@ template <bool Parallel> void Simulation::multilevel_guess() {
                 py[k] += h2 * w * (L.ty[k] - L.ry[k]) + h * L.vy[k];
                 pz[k] += h2 * w * (L.tz[k] - L.rz[k]) + h * L.vz[k];
             }
+        } else if (L.slack) { // FAS switched off: the natural rest lengths again
+            L.rest = L.rest0;
+            L.solver.set_spring_rest(L.rest);
+            L.slack = false;
         }
         // A level has a quarter of the particles of the next finer one: twice its sweeps cost half as much.
         ImplicitParams level_params = params_.implicit;
