@@ -230,7 +230,7 @@ void Solver::refresh_materials(const Cloth& cloth) {
 
 void Solver::set_spring_rest(std::span<const float> edge_rest) {
     for (std::size_t e = 0; e < graph_.spring_edge.size(); ++e) graph_.spring_rest[e] = edge_rest[graph_.spring_edge[e]];
-    if (grid_) grid_->refresh(graph_);
+    if (grid_) grid_->refresh_rest(graph_);
     if (!slices_) return;
     VbdSlices& sl = *slices_;
     for (std::size_t k = 0; k < sl.spring_edge.size(); ++k)

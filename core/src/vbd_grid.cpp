@@ -154,6 +154,18 @@ void GridLayout::refresh(const VbdGraph& g) {
     }
 }
 
+void GridLayout::refresh_rest(const VbdGraph& g) {
+    for (std::size_t i = 0; i < particles_; ++i) {
+        const std::size_t c = cell_of_[i];
+        const std::size_t cls = (c / stride_) % (std::size_t(period_) * period_);
+        for (std::uint32_t e = g.spring_offsets[i], s = 0; e < g.spring_offsets[i + 1]; ++e) {
+            const std::int64_t d = std::int64_t(cell_of_[g.spring_neighbour[e]]) - std::int64_t(c);
+            while (spring_delta_[cls * spring_dir_.size() + s] != d) ++s; // the entry's slot, as in refresh
+            rest_[spring_at(c, s)] = g.spring_rest[e];
+        }
+    }
+}
+
 template <bool Parallel>
 void GridLayout::pack(const LevelState& s, const float* px, const float* py, const float* pz) {
     const std::size_t n = particles_;

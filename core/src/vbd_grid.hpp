@@ -32,9 +32,11 @@ class GridLayout {
     /// fit it (a spring or bending entry further than two rows or columns, a row out of direction order, a colouring
     /// that is not the pattern): the sweeps then run on the gathered slices.
     static std::unique_ptr<GridLayout> cook(const VbdGraph& graph, std::uint32_t rows, std::uint32_t columns);
-    /// Copies every spring's k, kd and rest length and the bending rows from the graph (after a material change or
-    /// while seams are sewn).
+    /// Copies every spring's k, kd and rest length and the bending rows from the graph (after a material change).
     void refresh(const VbdGraph& graph);
+    /// Copies only the springs' rest lengths (Solver::set_spring_rest: seams being sewn, FAS's slack coarse
+    /// springs); the slots stay where refresh put them.
+    void refresh_rest(const VbdGraph& graph);
 
     std::size_t cells() const noexcept { return cells_; }
     std::size_t colour_count() const noexcept { return colour_class_.size(); }
