@@ -63,14 +63,16 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
         src.spring_pos(s, a.x, a.y, a.z, xj, yj, zj);
         const fbatch dx = xj - xi, dy = yj - yi, dz = zj - zi;
         const fbatch len2 = dx * dx + dy * dy + dz * dz;
+        // One square root serves both: sqrt(select(c, a, 1)) = select(c, sqrt(a), 1) exactly (sqrt(1) = 1).
+        const fbatch l0 = xsimd::sqrt(len2);
         if (s < cached_slots) {
             simd::store(cache_dx[s], dx);
             simd::store(cache_dy[s], dy);
             simd::store(cache_dz[s], dz);
-            simd::store(cache_l0[s], xsimd::sqrt(len2));
+            simd::store(cache_l0[s], l0);
         }
         const fmask stretched = len2 > tiny;
-        const fbatch inv_len = one / xsimd::sqrt(simd::select(stretched, len2, one));
+        const fbatch inv_len = one / simd::select(stretched, l0, one);
         const fbatch len = len2 * inv_len;
         const fbatch ux = dx * inv_len, uy = dy * inv_len, uz = dz * inv_len;
         const fbatch sforce = k * (len - l);
