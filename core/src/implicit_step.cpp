@@ -166,9 +166,8 @@ template <bool Parallel> void Simulation::multilevel_guess() {
         float* rx = is.res_x.data();
         float* ry = is.res_y.data();
         float* rz = is.res_z.data();
-        is.fine.gradient<Parallel>({a.x.data(), a.y.data(), a.z.data(), const_cast<float*>(a.x.data()),
-                                    const_cast<float*>(a.y.data()), const_cast<float*>(a.z.data()),
-                                    cloth_.inv_mass.data(), params_.colliders},
+        is.fine.gradient<Parallel>({a.x.data(), a.y.data(), a.z.data(), a.x.data(), a.y.data(), a.z.data(),
+                                    cloth_.inv_mass.data()},
                                    h, params_.air_drag, rx, ry, rz);
         const std::size_t n = cloth_.particle_count;
         for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
@@ -251,7 +250,7 @@ template <bool Parallel> void Simulation::multilevel_guess() {
             L.solver.set_spring_rest(L.rest);
             L.slack = true;
             L.solver.gradient<false>({L.x0.data(), L.y0.data(), L.z0.data(), L.x0.data(), L.y0.data(), L.z0.data(),
-                                      L.inv_mass.data(), params_.colliders},
+                                      L.inv_mass.data()},
                                      h, params_.air_drag, L.tx.data(), L.ty.data(), L.tz.data());
             // G - tau . x with tau = (the level's residual: its gradient at x^n plus M v^n / h) - (the cloth's,
             // restricted), folded into the prediction as y + h^2 M^-1 tau.
@@ -301,7 +300,7 @@ template <bool Parallel> void Simulation::multilevel_guess() {
     // The slope of the cloth's G along the correction c at the guess and at guess + c; secant step in [0, 1].
     auto slope = [&]() {
         is.fine.gradient<Parallel>({a.x.data(), a.y.data(), a.z.data(), b.x.data(), b.y.data(), b.z.data(),
-                                    cloth_.inv_mass.data(), params_.colliders},
+                                    cloth_.inv_mass.data()},
                                    h, params_.air_drag, is.res_x.data(), is.res_y.data(), is.res_z.data());
         for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
             double d = 0.0;

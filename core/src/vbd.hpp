@@ -80,10 +80,20 @@ class Solver {
     /// Runs the sweeps of one step of length h with air drag kr (1/s). No allocation.
     template <bool Parallel>
     ImplicitStats run(const LevelState& s, const ImplicitParams& params, float h, float air_drag);
-    /// The gradient of the step's objective G at s.x (N per vertex; 0 at fixed vertices), on the prediction filled
+    /// Where gradient() evaluates: the iterate x (read only) and x^n, and which vertices are fixed.
+    struct Point {
+        const float* x0; ///< x^n
+        const float* y0;
+        const float* z0;
+        const float* x; ///< the iterate
+        const float* y;
+        const float* z;
+        const float* inv_mass; ///< 0 = fixed
+    };
+    /// The gradient of the step's objective G at p.x (N per vertex; 0 at fixed vertices), on the prediction filled
     /// in; no step taken. No allocation.
     template <bool Parallel>
-    void gradient(const LevelState& s, float h, float air_drag, float* gx, float* gy, float* gz) const;
+    void gradient(const Point& p, float h, float air_drag, float* gx, float* gy, float* gz) const;
 
   private:
     VbdGraph graph_;
