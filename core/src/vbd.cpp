@@ -208,9 +208,10 @@ float contact_project(std::span<const Collider> colliders, const float p0[3], fl
 namespace {
 constexpr std::size_t vbd_chunk = 256; ///< vertices per parallel chunk of a colour (fixed: determinism)
 /// Particles under which the sweeps run serially (the multilevel guess's small levels). Measured (2-core AVX2 machine,
-/// drape_implicit throughput, 2 threads): 4096 -> 1024 took the N = 100 step at 25 iterations from 31.5-32.8 to
-/// 27.3-27.6 ms (its 50 x 50 level, 60 sweeps, went parallel); 512 and 128 gave the same; N = 316 unchanged.
-constexpr std::size_t serial_below = 1024;
+/// drape_implicit throughput, 2 threads, N = 100 step at 25 iterations): 4096 -> 1024 31.5-32.8 -> 27.3-27.6 ms (its
+/// 50 x 50 level went parallel); with 64-cell chunks (vbd_grid.cpp) 1024 -> 512 27.7-28.2 -> 25.6-25.9 ms (its 25 x 25
+/// level too); 128 the same as 512; N = 316 unchanged by any of them.
+constexpr std::size_t serial_below = 512;
 }
 
 Solver::Solver() = default;
