@@ -17,10 +17,10 @@ namespace {
 
 void print(const char* when, const drape::Simulation& sim, const drape::GarmentFigures& f) {
     const std::array<double, 3> o = sim.cloth().origin;
-    std::printf("%s: longest seam %.4f m, mirror error %.3g m at particle %zu (%.3f %.3f %.3f), inside the body %zu, "
-                "finite %s\n",
+    std::printf("%s: longest seam %.4f m, mirror error %.3g m at particle %zu (%.3f %.3f %.3f), rms %.3g m, %zu beyond "
+                "5 mm, inside the body %zu, finite %s\n",
                 when, f.longest_seam, f.mirror_error, f.worst, sim.x()[f.worst] + o[0], sim.y()[f.worst] + o[1],
-                sim.z()[f.worst] + o[2], f.inside, f.finite ? "yes" : "no");
+                sim.z()[f.worst] + o[2], f.mirror_rms, f.beyond, f.inside, f.finite ? "yes" : "no");
 }
 
 } // namespace

@@ -27,7 +27,7 @@ std::vector<std::uint32_t> tshirt_mirror_map(const TShirtParams& params) {
     return map;
 }
 
-GarmentFigures garment_figures(const Simulation& sim, std::span<const std::uint32_t> mirror) {
+GarmentFigures garment_figures(const Simulation& sim, std::span<const std::uint32_t> mirror, double beyond_distance) {
     GarmentFigures f;
     f.finite = sim.health().finite;
     const auto x = sim.x(), y = sim.y(), z = sim.z();
@@ -40,7 +40,9 @@ GarmentFigures garment_figures(const Simulation& sim, std::span<const std::uint3
     for (std::size_t i = 0; i < sim.cloth().particle_count && i < mirror.size(); ++i) {
         const std::size_t j = mirror[i];
         const double dx = (x[i] + o[0]) + (x[j] + o[0]), dy = y[i] - y[j], dz = z[i] - z[j];
-        const double e = std::sqrt(dx * dx + dy * dy + dz * dz);
+        const double e2 = dx * dx + dy * dy + dz * dz, e = std::sqrt(e2);
+        f.mirror_rms += e2;
+        if (e > beyond_distance) ++f.beyond;
         if (e > f.mirror_error) {
             f.mirror_error = e;
             f.worst = i;
@@ -51,6 +53,8 @@ GarmentFigures garment_figures(const Simulation& sim, std::span<const std::uint3
                 break;
             }
     }
+    const std::size_t counted = std::min(sim.cloth().particle_count, mirror.size());
+    if (counted > 0) f.mirror_rms = std::sqrt(f.mirror_rms / double(counted));
     return f;
 }
 
