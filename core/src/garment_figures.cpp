@@ -37,7 +37,8 @@ GarmentFigures garment_figures(const Simulation& sim, std::span<const std::uint3
         const double dx = x[s.b[k]] - x[s.a[k]], dy = y[s.b[k]] - y[s.a[k]], dz = z[s.b[k]] - z[s.a[k]];
         f.longest_seam = std::max(f.longest_seam, std::sqrt(dx * dx + dy * dy + dz * dz));
     }
-    for (std::size_t i = 0; i < sim.cloth().particle_count && i < mirror.size(); ++i) {
+    const std::size_t counted = std::min(sim.cloth().particle_count, mirror.size());
+    for (std::size_t i = 0; i < counted; ++i) {
         const std::size_t j = mirror[i];
         const double dx = (x[i] + o[0]) + (x[j] + o[0]), dy = y[i] - y[j], dz = z[i] - z[j];
         const double e2 = dx * dx + dy * dy + dz * dz, e = std::sqrt(e2);
@@ -53,7 +54,6 @@ GarmentFigures garment_figures(const Simulation& sim, std::span<const std::uint3
                 break;
             }
     }
-    const std::size_t counted = std::min(sim.cloth().particle_count, mirror.size());
     if (counted > 0) f.mirror_rms = std::sqrt(f.mirror_rms / double(counted));
     return f;
 }
