@@ -106,6 +106,10 @@ int main(int argc, char** argv) {
                   "Implicit solver, grid cloths of the fabric model: the coarse levels of the multilevel guess solve with the "
                   "cloth's own force residual (full approximation scheme): a cloth comes to rest at its own equilibrium "
                   "[scene's, off]");
+    cmd->add_flag("--single-level", run.single_level,
+                  "Implicit solver: no multilevel guess, every step solved on the cloth's own grid only; for cloth "
+                  "lying folded or crumpled on a collider, where the coarse grids' guess keeps it moving "
+                  "(docs/implicit.md); a hanging cloth does not come to rest without it [scene's, multilevel on]");
     cmd->add_option("--material", run.material,
                     "Material: a fabric preset (silk, cotton_shirting, jersey, linen, wool, denim, ...; see drape "
                     "materials), switching the cloth to the fabric model, or springs (the seeds' spring model with "

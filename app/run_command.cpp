@@ -97,7 +97,7 @@ int run_command(const RunOptions& o) {
     if (o.stiffness) spec.stiffness = *o.stiffness;
     if (o.damping) spec.damping_ratio = *o.damping;
     if (o.drag) spec.physics.air_drag = *o.drag;
-    apply_solver_flags(spec, {o.solver, o.iterations, o.tolerance, o.integrator, o.strain_limit, o.fas});
+    apply_solver_flags(spec, {o.solver, o.iterations, o.tolerance, o.integrator, o.strain_limit, o.fas, o.single_level});
     const bool implicit = spec.physics.solver == Solver::implicit;
     if (o.wind) spec.physics.wind.enabled = true;
     if (o.aero) spec.physics.aero.enabled = true;
@@ -210,6 +210,8 @@ int run_command(const RunOptions& o) {
                          {"tolerance", sp.implicit.tolerance},
                          {"chebyshev_rho", sp.implicit.chebyshev_rho},
                          {"fas", sp.implicit.fas},
+                         {"multilevel", sp.implicit.multilevel},
+                         {"levels", st.levels}, // grids the last step solved: 1 + coarse levels
                          {"method", sp.implicit.method == ImplicitMethod::jacobi ? "jacobi" : "gauss_seidel"}};
     }
     j["kernel"] = kernel_path_name(sim.kernel());

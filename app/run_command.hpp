@@ -20,6 +20,7 @@ struct RunOptions {
     std::optional<std::uint32_t> iterations; ///< implicit solver: sweeps per step
     std::optional<float> tolerance;          ///< implicit solver: relative residual to stop a step early
     bool fas = false;                        ///< implicit solver: the multilevel guess's coarse correction
+    bool single_level = false;               ///< implicit solver: no multilevel guess
     /// A fabric preset (switches the scene to the fabric model) or "springs" (the seeds' spring model).
     std::optional<std::string> material;
     std::optional<float> stiffness;

@@ -1160,6 +1160,15 @@ void ViewSession::set_chebyshev_rho(float rho) {
     commit_params(p, "chebyshev rho");
 }
 
+void ViewSession::set_multilevel(bool on) {
+    SimulationParams p = sim_->params();
+    if (p.implicit.multilevel == on) return;
+    p.implicit.multilevel = on;
+    commit_params(p, "multilevel guess");
+    single_level_warned_ = false;
+    warn_single_level_implicit();
+}
+
 void ViewSession::set_iteration_budget(bool on) {
     if (on == budget_on_ || busy("iteration budget")) return;
     const Snapshot before = snapshot();

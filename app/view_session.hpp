@@ -272,6 +272,8 @@ class ViewSession {
     /// The iterations per step running now (the budget's choice, or max_iterations() without it).
     std::uint32_t iterations() const noexcept { return sim_->params().implicit.iterations; }
     void set_chebyshev_rho(float rho);
+    /// The implicit solver's multilevel guess on or off (ImplicitParams::multilevel; undoable).
+    void set_multilevel(bool on);
     /// The iteration budget (implicit solver): on, the iterations follow budget_iterations() every
     /// view_budget_frames frames so that the simulation takes about sim_budget_ms() per frame.
     bool iteration_budget() const noexcept { return budget_on_; }

@@ -383,6 +383,11 @@ void Viewer::ui_solver() {
         s.set_chebyshev_rho(rho);
     help_marker("Chebyshev acceleration of the sweeps (Wang 2015): the estimate of the sweep's spectral radius; 0 = "
                 "off.");
+    bool multilevel = p.implicit.multilevel;
+    if (ImGui::Checkbox("multilevel guess", &multilevel)) s.set_multilevel(multilevel);
+    help_marker("Grid cloths of the fabric model: each step starts from the same step solved on coarser grids, so a "
+                "hanging cloth falls and settles in a few sweeps. Switch it off for cloth lying folded or crumpled on "
+                "a collider: the coarse grids cannot represent a fold and their guess keeps such a cloth moving.");
     bool budget = s.iteration_budget();
     if (ImGui::Checkbox("iteration budget", &budget)) s.set_iteration_budget(budget);
     ImGui::SameLine();

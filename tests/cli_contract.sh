@@ -134,6 +134,7 @@ expect_error "--iterations: '2.5' must be a whole number in [1, 1000]" run --sol
 expect_error "--tolerance: value 2 is outside the allowed range [0, 1]" run --solver implicit --tolerance 2
 expect_error "--dt: value 0.5 is outside the allowed range" run --solver implicit --dt 0.5
 expect_error "--iterations: a flag of the implicit solver, but the solver is explicit" run --iterations 10
+expect_error "--single-level: a flag of the implicit solver, but the solver is explicit" run --single-level
 expect_error "--integrator: verlet is a choice of the explicit solver only" run --solver implicit --integrator verlet
 expect_error "--iterations: value 5000 is outside the allowed range [1, 1000]" view --iterations 5000
 expect_error "--solver: rk4 not in {explicit,implicit}" view --solver rk4
@@ -152,6 +153,7 @@ assert j["solver"] == "implicit" and j["integrator"] == "euler", j
 assert j["steps"] == j["substeps"] == 4 and abs(j["dt"] - 0.05) < 1e-9 and j["dt"] > j["dt_max"], j
 im = j["implicit"]
 assert 1 <= im["iterations"] <= 20 and im["max_iterations"] == 20 and im["method"] == "gauss_seidel", im
+assert im["multilevel"] is True and im["levels"] > 1, im  # a 100 x 100 fabric grid: the multilevel guess
 assert math.isfinite(im["relative_residual"]) and im["relative_residual"] >= 0, im
 assert j["real_time_factor"] > 0 and j["finite"] and j["healthy"], j
 print("ok: drape run --solver implicit --size 100 --dt 0.05 -> %d iterations, residual %.3g, %.3gx real time"

@@ -453,4 +453,34 @@ TEST(Implicit, SingleLevelClothsAreWarnedAbout) {
     EXPECT_FALSE(warning(springs, Solver::implicit).empty()) << "the springs model has no coarse levels";
     springs.grid.n = 10;
     EXPECT_TRUE(warning(springs, Solver::implicit).empty()) << "100 particles: below the warning's 256";
+    SceneSpec single = hang;
+    single.physics.implicit.multilevel = false;
+    const std::string off = warning(single, Solver::implicit);
+    EXPECT_NE(off.find("switched off"), std::string::npos) << "the user's own choice, named as such: " << off;
+}
+
+// --single-level / physics.implicit.multilevel false / the viewer's checkbox: the steps solve the cloth's own grid
+// only, and switching it back on (set_params, as the viewer does) brings the coarse levels back.
+TEST(Implicit, MultilevelGuessCanBeSwitchedOff) {
+    SceneSpec spec = load_scene("hang");
+    spec.grid.n = 32;
+    spec.physics.solver = Solver::implicit;
+    spec.physics.implicit.multilevel = false;
+    BuiltScene b = build_scene(spec);
+    Simulation sim(std::move(b.cloth), b.initial, b.params);
+    sim.step(2);
+    EXPECT_EQ(sim.implicit_levels(), 1u);
+    EXPECT_EQ(sim.implicit_stats().levels, 1u);
+    const std::uint64_t single = sim.checksum();
+    SimulationParams p = sim.params();
+    p.implicit.multilevel = true;
+    sim.set_params(p);
+    sim.step(1);
+    EXPECT_GT(sim.implicit_levels(), 1u);
+    EXPECT_EQ(sim.implicit_stats().levels, sim.implicit_levels());
+    BuiltScene c = build_scene(spec);
+    c.params.implicit.multilevel = true;
+    Simulation on(std::move(c.cloth), c.initial, c.params);
+    on.step(2);
+    EXPECT_NE(on.checksum(), single) << "the coarse levels change the steps";
 }

@@ -117,6 +117,8 @@ void expect_same_spec(const SceneSpec& a, const SceneSpec& b, const std::string&
     EXPECT_TRUE(same_bits(p.implicit.tolerance, q.implicit.tolerance)) << what;
     EXPECT_TRUE(same_bits(p.implicit.chebyshev_rho, q.implicit.chebyshev_rho)) << what;
     EXPECT_EQ(p.implicit.method, q.implicit.method) << what;
+    EXPECT_EQ(p.implicit.fas, q.implicit.fas) << what;
+    EXPECT_EQ(p.implicit.multilevel, q.implicit.multilevel) << what;
     EXPECT_EQ(p.wind.enabled, q.wind.enabled) << what;
     EXPECT_TRUE(same_bits(p.wind.strength, q.wind.strength)) << what;
     EXPECT_EQ(p.aero.enabled, q.aero.enabled) << what;
@@ -235,9 +237,14 @@ TEST(SceneWrite, ImplicitSolverRoundTrips) {
                               "\"chebyshev_rho\": 0.85", "\"method\": \"jacobi\""})
         EXPECT_TRUE(has(text, field)) << field << "\n" << text;
     EXPECT_FALSE(has(text, "\"dt\"")) << "absent dt stays absent (the implicit default, a frame)";
+    EXPECT_FALSE(has(text, "\"multilevel\"")) << "the default (on) is left out";
     const SceneSpec back = parse_scene(text, "implicit.json");
     expect_same_spec(s, back, "implicit");
     expect_same_build(build_scene(s), build_scene(back), "implicit");
+    s.physics.implicit.multilevel = false;
+    const std::string single = scene_to_json(s);
+    EXPECT_TRUE(has(single, "\"multilevel\": false")) << single;
+    expect_same_spec(s, parse_scene(single, "single.json"), "implicit, single level");
     EXPECT_EQ(build_scene(back).params.dt, implicit_default_dt);
     s.dt = 0.02f;
     expect_same_spec(s, parse_scene(scene_to_json(s), "implicit_dt.json"), "implicit with dt");

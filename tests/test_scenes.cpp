@@ -154,6 +154,8 @@ INSTANTIATE_TEST_SUITE_P(
                 "physics.implicit.chebyshev_rho = 1.5 is outside the allowed range"},
         BadFile{"implicit_method", R"({"physics": {"implicit": {"method": "sor"}}})",
                 "physics.implicit.method = \"sor\" is not one of \"gauss_seidel\", \"jacobi\""},
+        BadFile{"implicit_multilevel", R"({"physics": {"implicit": {"multilevel": 1}}})",
+                "physics.implicit.multilevel must be true or false"},
         BadFile{"implicit_unknown", R"({"physics": {"implicit": {"sweeps": 3}}})",
                 "physics.implicit.sweeps is not a known field"},
         // Numbers a double cannot hold, and NaN / Infinity (not JSON): a range error at the field, never an abort.
