@@ -777,6 +777,23 @@ TEST(ViewSessionImplicit, IterationBudgetFollowsTheFrameTime) {
     EXPECT_EQ(s.sim().params().implicit.iterations, 40u);
 }
 
+// The Physics panel's "multilevel guess" checkbox: off solves one grid (the warning says it was switched off), undo
+// brings it back, and a saved scene keeps the choice.
+TEST(ViewSessionImplicit, MultilevelGuessCheckbox) {
+    ViewSession s("hang", 32, 1, std::nullopt, std::string("wool"), SolverFlags{"implicit", {}, {}, {}, {}});
+    EXPECT_TRUE(s.params().implicit.multilevel);
+    EXPECT_GT(s.sim().implicit_levels(), 1u);
+    s.set_multilevel(false);
+    EXPECT_FALSE(s.params().implicit.multilevel);
+    EXPECT_EQ(s.sim().implicit_levels(), 1u);
+    EXPECT_EQ(s.advance(), 1u);
+    EXPECT_EQ(s.sim().implicit_stats().levels, 1u);
+    EXPECT_FALSE(parse_scene(scene_to_json(s.current_spec()), "saved.json").physics.implicit.multilevel);
+    s.undo();
+    EXPECT_TRUE(s.params().implicit.multilevel);
+    EXPECT_GT(s.sim().implicit_levels(), 1u);
+}
+
 TEST(ViewSessionImplicit, FlagsScenesAndSavedScenes) {
     ViewSession s("hang", 16, 1, std::nullopt, std::string("springs"), SolverFlags{"implicit", 12, 0.01f, {}, 0.1f}, 0.02);
     EXPECT_EQ(s.solver(), Solver::implicit);
