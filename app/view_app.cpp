@@ -77,7 +77,8 @@ Viewer::Viewer(const ViewOptions& options) : options_(options) {
     // The scene first: a bad --scene or --size is reported before any window opens.
     session_ = std::make_unique<ViewSession>(options.scene, options.size, options.threads, options.substeps,
                                              options.material,
-                                             SolverFlags{options.solver, options.iterations, options.tolerance, {}, options.strain_limit},
+                                             SolverFlags{options.solver, options.iterations, options.tolerance, {}, options.strain_limit,
+                                                         false, options.single_level},
                                              options.dt);
     show_ui_ = options.ui;
     scripted_mouse = options.demo_grab;

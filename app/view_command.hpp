@@ -19,6 +19,7 @@ struct ViewOptions {
     std::optional<std::string> solver;       ///< explicit | implicit (empty: the scene's)
     std::optional<std::uint32_t> iterations; ///< implicit: the most iterations per step
     std::optional<float> tolerance;          ///< implicit: relative residual that ends a step early
+    bool single_level = false;               ///< implicit: no multilevel guess (--single-level)
     std::optional<float> strain_limit;       ///< largest stretch of the limited springs (0 = off; empty: the scene's)
     std::optional<double> dt;                ///< the implicit step, or the explicit substep (empty: automatic)
     int width = 1280;            ///< window, screen coordinates

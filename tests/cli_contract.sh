@@ -135,6 +135,7 @@ expect_error "--tolerance: value 2 is outside the allowed range [0, 1]" run --so
 expect_error "--dt: value 0.5 is outside the allowed range" run --solver implicit --dt 0.5
 expect_error "--iterations: a flag of the implicit solver, but the solver is explicit" run --iterations 10
 expect_error "--single-level: a flag of the implicit solver, but the solver is explicit" run --single-level
+expect_error "--single-level: a flag of the implicit solver, but the solver is explicit" view --single-level
 expect_error "--integrator: verlet is a choice of the explicit solver only" run --solver implicit --integrator verlet
 expect_error "--iterations: value 5000 is outside the allowed range [1, 1000]" view --iterations 5000
 expect_error "--solver: rk4 not in {explicit,implicit}" view --solver rk4
