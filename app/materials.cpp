@@ -174,14 +174,13 @@ void apply_solver_flags(SceneSpec& spec, const SolverFlags& f) {
 std::string single_level_implicit_warning(const Simulation& sim) {
     if (sim.params().solver != Solver::implicit || sim.implicit_levels() != 1 || sim.cloth().particle_count < 256)
         return {};
+    const std::string one_grid = "solved on one grid does not come to rest at ordinary sweep counts (a 32 x 32 hang "
+                                 "jumped 5-27 cm per step at 30 sweeps, docs/implicit.md)";
     if (!sim.params().implicit.multilevel)
         return "the implicit solver's multilevel guess is switched off (--single-level, physics.implicit.multilevel): "
-               "right for cloth lying folded or crumpled on a collider, but a hanging cloth solved on one grid does "
-               "not come to rest at ordinary sweep counts (a 32 x 32 hang jumped 5-27 cm per step at 30 sweeps, "
-               "docs/implicit.md)";
+               "right for cloth lying folded or crumpled on a collider, but a hanging cloth " + one_grid;
     return "the implicit solver has no multilevel guess for this cloth (only square grids of the fabric model have "
-           "one): a cloth solved on one grid does not come to rest at ordinary sweep counts (a 32 x 32 hang jumped "
-           "5-27 cm per step at 30 sweeps, docs/implicit.md); prefer the explicit solver here";
+           "one): a cloth " + one_grid + "; prefer the explicit solver here";
 }
 
 } // namespace drape::app

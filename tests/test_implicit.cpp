@@ -19,6 +19,7 @@
 #include "drape/stability.hpp"
 #include "drape/workers.hpp"
 #include "materials.hpp"
+#include "test_helpers.hpp"
 #include "vbd.hpp"
 
 using namespace drape;
@@ -495,20 +496,7 @@ TEST(Implicit, SingleLevelLetsAFoldedClothOnTheGroundComeToRest) {
     hp.size = 0.5f;
     hp.pins = GridPins::none;
     SceneBuild scene = build_hang_scene(hp);
-    const std::uint32_t n = hp.n;
-    const float s = hp.size / float(n - 1), yb = 0.004f;
-    InitialState& st = scene.initial;
-    for (std::uint32_t j = 0; j < n; ++j)
-        for (std::uint32_t i = 0; i < n; ++i) {
-            const std::uint32_t k = grid_index(n, i, j);
-            if (i < n / 2) {
-                st.x[k] = float(i) * s, st.y[k] = yb, st.z[k] = float(j) * s;
-            } else {
-                const float wave = 0.3f * s * std::sin(0.7f * float(j)) * std::sin(0.9f * float(i - n / 2));
-                st.x[k] = float(n - 1 - i) * s + 0.3f * s, st.y[k] = yb + s + wave, st.z[k] = float(j) * s + 0.3f * s;
-            }
-            st.vx[k] = st.vy[k] = st.vz[k] = 0.0f;
-        }
+    drape::testing::fold_over_itself(hp.n, hp.size, scene.initial);
     SimulationParams p = implicit_params(1.0f / 240.0f, 30);
     p.colliders = {make_ground(0.0f, {0.002f, 0.5f})};
     p.implicit.multilevel = false;

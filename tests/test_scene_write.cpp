@@ -10,6 +10,7 @@
 
 #include "drape/scene.hpp"
 #include "drape/scene_write.hpp"
+#include "test_helpers.hpp"
 
 using namespace drape;
 
@@ -318,15 +319,7 @@ TEST(SceneWrite, SelfCollisionSnapshotIsSavedAndResumed) {
     const BuiltScene flat = build_scene(spec);
     SceneState fold;
     fold.origin = flat.cloth.origin;
-    const float h = spec.grid.size / float(n - 1), yb = 0.004f;
-    for (std::uint32_t j = 0; j < n; ++j)
-        for (std::uint32_t i = 0; i < n; ++i) { // grid_index order: row j, column i
-            const float wave = 0.3f * h * std::sin(0.7f * float(j)) * std::sin(0.9f * float(i) - 0.9f * float(n / 2));
-            const bool top = i >= n / 2; // folded back over the bottom half
-            fold.x.push_back(top ? float(n - 1 - i) * h + 0.3f * h : float(i) * h);
-            fold.y.push_back(top ? yb + h + wave : yb);
-            fold.z.push_back(top ? float(j) * h + 0.3f * h : float(j) * h);
-        }
+    drape::testing::fold_over_itself(n, spec.grid.size, fold.x, fold.y, fold.z);
     fold.vx.assign(fold.x.size(), 0.0f);
     fold.vy = fold.vx;
     fold.vz = fold.vx;

@@ -22,6 +22,7 @@
 #include "drape/simulation.hpp"
 #include "drape/stability.hpp"
 #include "drape/workers.hpp"
+#include "test_helpers.hpp"
 
 namespace drape {
 namespace {
@@ -214,20 +215,7 @@ Pile folded_pile(float thickness, Solver solver) {
     hp.model = MaterialModel::fabric;
     hp.fabric = *find_fabric("wool");
     Pile pile{build_hang_scene(hp), {}};
-    const std::uint32_t n = hp.n;
-    const float s = hp.size / float(n - 1), yb = 0.004f;
-    InitialState& st = pile.scene.initial;
-    for (std::uint32_t j = 0; j < n; ++j)
-        for (std::uint32_t i = 0; i < n; ++i) {
-            const std::uint32_t k = grid_index(n, i, j);
-            if (i < n / 2) {
-                st.x[k] = float(i) * s, st.y[k] = yb, st.z[k] = float(j) * s;
-            } else { // folded back over the bottom half
-                const float wave = 0.3f * s * std::sin(0.7f * float(j)) * std::sin(0.9f * float(i - n / 2));
-                st.x[k] = float(n - 1 - i) * s + 0.3f * s, st.y[k] = yb + s + wave, st.z[k] = float(j) * s + 0.3f * s;
-            }
-            st.vx[k] = st.vy[k] = st.vz[k] = 0.0f;
-        }
+    drape::testing::fold_over_itself(hp.n, hp.size, pile.scene.initial);
     SimulationParams& p = pile.params;
     p.solver = solver;
     p.dt = solver == Solver::implicit ? 1.0f / 240.0f : float(default_dt(pile.scene.cloth, p.air_drag));
