@@ -12,8 +12,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <random>
+#include <set>
 
 #include "closest_points.hpp"
+#include "self_collide_patches.hpp"
 #include "drape/fabric.hpp"
 #include "drape/panels.hpp"
 #include "drape/scene.hpp"
@@ -386,6 +388,184 @@ TEST(SelfCollision, BitwiseSameForEveryThreadCount) {
         EXPECT_EQ(sums[0], sums[1]);
         EXPECT_EQ(sums[1], sums[2]);
     }
+}
+
+// The patches of a 20 x 20 grid cloth (self_collide_patches.cpp): every triangle, particle and edge in exactly one
+// patch, each patch connected and at most the target, the touching relation symmetric and true to shared particles,
+// the border patches exactly those with a triangle on the grid's edge; a particle in no triangle gets a patch too.
+TEST(SelfCollisionBroadPhase, PatchesCoverTheClothOnce) {
+    HangParams hp;
+    hp.n = 20;
+    hp.pins = GridPins::none;
+    const SceneBuild scene = build_hang_scene(hp);
+    std::vector<std::uint32_t> tris = scene.cloth.triangles;
+    const std::size_t n = scene.cloth.particle_count + 1; // one more particle, in no triangle
+    const std::size_t t_count = tris.size() / 3;
+    std::vector<std::uint32_t> offsets(n + 1, 0), vt(tris.size());
+    for (std::uint32_t v : tris) ++offsets[v + 1];
+    for (std::size_t i = 0; i < n; ++i) offsets[i + 1] += offsets[i];
+    std::vector<std::uint32_t> fill(offsets.begin(), offsets.end() - 1);
+    for (std::uint32_t t = 0; t < t_count; ++t)
+        for (int k = 0; k < 3; ++k) vt[fill[tris[3 * t + k]]++] = t;
+    std::vector<std::uint32_t> edges;
+    for (std::size_t t = 0; t < t_count; ++t)
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t a = tris[3 * t + k], b = tris[3 * t + (k + 1) % 3];
+            edges.push_back(std::min(a, b)), edges.push_back(std::max(a, b));
+        }
+    std::vector<std::uint64_t> keys;
+    for (std::size_t e = 0; e < edges.size(); e += 2) keys.push_back(std::uint64_t(edges[e]) << 32 | edges[e + 1]);
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    edges.clear();
+    for (std::uint64_t k : keys) edges.push_back(std::uint32_t(k >> 32)), edges.push_back(std::uint32_t(k));
+    for (std::uint32_t target : {8u, 32u}) {
+        SCOPED_TRACE(target);
+        const SelfCollisionPatches pa = cook_self_collision_patches(tris, n, edges, offsets, vt, target);
+        const std::size_t patches = pa.count();
+        std::vector<int> tri_patch(t_count, -1), seen_point(n, 0), seen_edge(edges.size() / 2, 0);
+        for (std::size_t p = 0; p < patches; ++p) {
+            EXPECT_LE(pa.tri_start[p + 1] - pa.tri_start[p], target);
+            for (std::uint32_t s = pa.tri_start[p]; s < pa.tri_start[p + 1]; ++s) {
+                EXPECT_EQ(tri_patch[pa.tris[s]], -1);
+                tri_patch[pa.tris[s]] = int(p);
+            }
+            for (std::uint32_t s = pa.point_start[p]; s < pa.point_start[p + 1]; ++s) ++seen_point[pa.points[s]];
+            for (std::uint32_t s = pa.edge_start[p]; s < pa.edge_start[p + 1]; ++s) ++seen_edge[pa.edges[s]];
+        }
+        EXPECT_EQ(std::count(tri_patch.begin(), tri_patch.end(), -1), 0);
+        EXPECT_EQ(std::count(seen_point.begin(), seen_point.end(), 1), std::ptrdiff_t(n));
+        EXPECT_EQ(std::count(seen_edge.begin(), seen_edge.end(), 1), std::ptrdiff_t(seen_edge.size()));
+        EXPECT_EQ(pa.points[pa.point_start[patches - 1]], n - 1) << "the loose particle's own patch comes last";
+        EXPECT_EQ(pa.on_border[patches - 1], 1);
+        // Connected: a flood over triangles sharing a particle, within the patch, reaches all of it.
+        for (std::size_t p = 0; p + 1 < patches; ++p) {
+            std::vector<std::uint32_t> stack{pa.tris[pa.tri_start[p]]};
+            std::vector<char> reached(t_count, 0);
+            reached[stack[0]] = 1;
+            std::size_t count = 0;
+            while (!stack.empty()) {
+                const std::uint32_t t = stack.back();
+                stack.pop_back();
+                ++count;
+                for (int k = 0; k < 3; ++k)
+                    for (std::uint32_t j = offsets[tris[3 * t + k]]; j < offsets[tris[3 * t + k] + 1]; ++j)
+                        if (!reached[vt[j]] && tri_patch[vt[j]] == int(p)) reached[vt[j]] = 1, stack.push_back(vt[j]);
+            }
+            EXPECT_EQ(count, pa.tri_start[p + 1] - pa.tri_start[p]) << "patch " << p;
+        }
+        // Touching: exactly the pairs of patches with triangles at a common particle; border: a triangle on the edge.
+        std::set<std::pair<int, int>> touching;
+        for (std::size_t v = 0; v < n; ++v)
+            for (std::uint32_t i = offsets[v]; i < offsets[v + 1]; ++i)
+                for (std::uint32_t j = offsets[v]; j < offsets[v + 1]; ++j)
+                    if (tri_patch[vt[i]] != tri_patch[vt[j]]) touching.insert({tri_patch[vt[i]], tri_patch[vt[j]]});
+        std::set<std::pair<int, int>> listed;
+        for (std::size_t p = 0; p < patches; ++p)
+            for (std::uint32_t k = pa.adj_start[p]; k < pa.adj_start[p + 1]; ++k) listed.insert({int(p), int(pa.adj[k])});
+        EXPECT_EQ(listed, touching);
+        for (std::size_t p = 0; p + 1 < patches; ++p) {
+            bool border = false;
+            for (std::uint32_t s = pa.tri_start[p]; s < pa.tri_start[p + 1]; ++s)
+                for (int k = 0; k < 3; ++k) {
+                    const std::uint32_t a = tris[3 * pa.tris[s] + k], b = tris[3 * pa.tris[s] + (k + 1) % 3];
+                    const auto [ia, ja] = std::pair{a % hp.n, a / hp.n};
+                    const auto [ib, jb] = std::pair{b % hp.n, b / hp.n};
+                    border = border || (ia == ib && (ia == 0 || ia == hp.n - 1)) || (ja == jb && (ja == 0 || ja == hp.n - 1));
+                }
+            EXPECT_EQ(pa.on_border[p], border ? 1 : 0) << "patch " << p;
+        }
+    }
+}
+
+// The broad phase (patches with their boxes and cones of normals, flat pieces skipped, a spatial hash of the patches)
+// against the reference that tests every pair of the cloth through the same narrow phase: the same contacts, so the
+// same bits, at every check, on cloths that fold, stack three deep, are flung about by the implicit solver, and on the
+// sewn T-shirt with its front pushed into its back.
+struct BroadPhaseCase {
+    const char* name;
+    SceneBuild scene;
+    SimulationParams params;
+    int checks;
+    std::size_t steps_per_check;
+};
+
+// A 24 x 24 cloth folded in three (a Z): the first and third thirds face the same way, 2 g apart.
+void fold_in_three(std::uint32_t n, float size, float g, InitialState& s) {
+    const float sp = size / float(n - 1), yb = 0.004f;
+    const std::uint32_t third = n / 3;
+    for (std::uint32_t j = 0; j < n; ++j)
+        for (std::uint32_t i = 0; i < n; ++i) {
+            const std::uint32_t k = grid_index(n, i, j);
+            const int layer = i < third ? 0 : (i < 2 * third ? 1 : 2);
+            const float u = layer == 1 ? float(2 * third - 1 - i) : float(i - (layer == 2 ? 2 * third : 0));
+            s.x[k] = u * sp + 0.3f * sp * float(layer);
+            s.y[k] = yb + g * float(layer);
+            s.z[k] = float(j) * sp + 0.2f * sp * float(layer);
+        }
+}
+
+TEST(SelfCollisionBroadPhase, SameBitsAsTestingEveryPair) {
+    const int checks = drape::testing::sanitized ? 3 : 6;
+    std::vector<BroadPhaseCase> cases;
+    {
+        Pile pile = folded_pile(0.01f, Solver::explicit_euler);
+        cases.push_back({"folded in two, explicit", std::move(pile.scene), pile.params, checks, 0});
+        cases.back().steps_per_check = std::size_t(0.012 / cases.back().params.dt);
+    }
+    {
+        Pile pile = folded_pile(0.01f, Solver::explicit_euler);
+        fold_in_three(24, 0.5f, 0.006f, pile.scene.initial);
+        cases.push_back({"folded in three, explicit", std::move(pile.scene), pile.params, checks, 0});
+        cases.back().steps_per_check = std::size_t(0.004 / cases.back().params.dt);
+    }
+    {
+        Pile pile = folded_pile(0.004f, Solver::implicit);
+        cases.push_back({"folded in two, implicit", std::move(pile.scene), pile.params, checks, 2});
+    }
+    for (BroadPhaseCase& c : cases) {
+        SCOPED_TRACE(c.name);
+        const auto t0 = std::chrono::steady_clock::now();
+        Simulation fast(Cloth(c.scene.cloth), c.scene.initial, c.params);
+        Simulation every(std::move(c.scene.cloth), c.scene.initial, c.params);
+        every.set_self_collision_reference(true);
+        std::size_t contacts = 0;
+        for (int k = 0; k < c.checks; ++k) {
+            fast.step(c.steps_per_check);
+            every.step(c.steps_per_check);
+            ASSERT_EQ(fast.checksum(), every.checksum()) << "check " << k;
+            ASSERT_EQ(fast.self_contacts(), every.self_contacts()) << "check " << k;
+            contacts += fast.self_contacts();
+        }
+        EXPECT_GT(contacts, 0u) << "no contacts: the comparison would say nothing";
+        std::printf("%s: %zu contacts over the checks, %zu runs of the stage (%.1f s)\n", c.name, contacts,
+                    fast.self_collision_runs(),
+                    std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    // The T-shirt (sewn panels: particles sewn together are one point): its front hem pushed back through where the
+    // back hangs.
+    SceneSpec spec = load_scene("tshirt");
+    spec.physics.self_collision.thickness = 0.004f;
+    BuiltScene b = build_scene(spec);
+    Simulation fast(Cloth(b.cloth), b.initial, b.params), every(std::move(b.cloth), b.initial, b.params);
+    every.set_self_collision_reference(true);
+    const TShirtBuild t = build_tshirt(spec.tshirt);
+    const std::size_t hem = std::size_t(t.front.particle_at(t.front.rows - 1, t.front.columns / 2));
+    const float dt = fast.params().dt;
+    std::size_t contacts = 0;
+    for (Simulation* sim : {&fast, &every}) {
+        sim->step(static_cast<std::size_t>(0.05 / dt));
+        const std::array<float, 3> p0{sim->x()[hem], sim->y()[hem], sim->z()[hem]};
+        sim->grab(hem, p0);
+        for (int k = 1; k <= checks; ++k) {
+            sim->move_grab({p0[0], p0[1] - 0.016f * float(k), p0[2] - 0.048f * float(k)});
+            sim->step(static_cast<std::size_t>(0.01 / dt));
+            if (sim == &fast) contacts += sim->self_contacts();
+        }
+    }
+    EXPECT_EQ(fast.checksum(), every.checksum());
+    EXPECT_GT(contacts, 0u) << "the panels did not meet: the comparison would say nothing";
+    std::printf("T-shirt pushed: %zu contacts over the checks, %zu runs of the stage\n", contacts, fast.self_collision_runs());
 }
 
 TEST(SelfCollision, ParametersAreValidated) {

@@ -18,11 +18,19 @@
 // A pair held at the thickness already (within 1%) and not approaching is left alone; a second and third round run
 // only after a push of more than h / 2.
 //
-// Broad phase: a spatial hash of cubic cells of size c = 1.01 (longest edge now + 2 h), rebuilt each round. Every
-// triangle (its box grown by h) and every edge (grown by h / 2) is entered in the buckets of the cells its box
-// overlaps: at most 2 per axis since the box is shorter than c, so at most 8 entries per primitive and every array is
-// sized when cooked. A particle looks in its own cell's bucket; an edge looks in the buckets of its cells and takes a
-// pair only in the cell holding the low corner of the two boxes' intersection (each pair once).
+// Broad phase (docs/self_collision.md, "Broad phase"): the triangles are cut once into compact connected patches of
+// 8 to 32 triangles (self_collide_patches.cpp; the size follows h over the edge length); each particle and edge belongs
+// to one. Every round gives each patch a box (its triangles' boxes grown by h) and a cone of normals (unit axis,
+// half-angle), after Volino and Magnenat-Thalmann 1994 ("Efficient self-collision detection on smoothly discretized
+// surface animations using geometrical shape regularity"): cloth whose normals lie in a narrow cone is a graph over a
+// plane and cannot come within h of itself if it is bent little enough for its triangles' altitudes (the test is in
+// self_collide_round, "Flat pieces"). A patch that lies flat with all the patches it touches, away from the cloth's
+// border, is calm: its own pairs, and those with a calm patch it touches or that touches the same calm patch, are
+// skipped. The other patch pairs whose boxes overlap are found through a spatial hash of the patches (cells as large
+// as the largest patch box, so at most 8 cells a patch; a pair is taken in the cell holding the low corner of the
+// boxes' intersection) and searched primitive by primitive: the points of each inside the other's box against the
+// triangles of the other, the edges of each inside the other's box against each other, each pair once.
+// set_self_collision_reference tests every pair instead, for the tests.
 //
 // Parallel and deterministic: the buckets are filled with atomic cursors (their order varies from run to run), but
 // every contact is computed from the pair alone, and what it asks of each particle is added into per-particle 64-bit
@@ -32,11 +40,13 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
 
 #include "closest_points.hpp"
+#include "self_collide_patches.hpp"
 #include "drape/simulation.hpp"
 
 namespace drape {
@@ -48,6 +58,7 @@ constexpr double fixed_scale = 4294967296.0; // 2^32
 constexpr int self_collide_rounds = 3;        // most rounds per step (a second one only after a deep push)
 constexpr double settled = 0.01;              // a pair within 1% of the thickness, not approaching: no contact
 constexpr std::size_t sc_block = 256;         // particles / primitives per parallel task
+constexpr float flat_cone = 1.0471976f;       // 60 degrees: the widest cone of normals a flat piece may have
 
 inline V3 cross(V3 a, V3 b) noexcept { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
 
@@ -78,42 +89,71 @@ template <bool Parallel, class F> void for_blocks(std::size_t count, F&& body) {
 } // namespace
 
 void Simulation::cook_self_collision() {
-    if (!sc_acc_.empty() || cloth_.triangles.empty()) return;
-    cook_vertex_triangles();
+    if (cloth_.triangles.empty()) return;
     const std::size_t n = cloth_.particle_count, tris = cloth_.triangles.size() / 3;
-    std::vector<std::uint64_t> keys;
-    keys.reserve(3 * tris);
-    for (std::size_t t = 0; t < tris; ++t)
-        for (int k = 0; k < 3; ++k) {
-            std::uint32_t a = cloth_.triangles[3 * t + k], b = cloth_.triangles[3 * t + (k + 1) % 3];
-            if (a > b) std::swap(a, b);
-            keys.push_back(std::uint64_t(a) << 32 | b);
+    if (sc_acc_.empty()) {
+        cook_vertex_triangles();
+        std::vector<std::uint64_t> keys;
+        keys.reserve(3 * tris);
+        for (std::size_t t = 0; t < tris; ++t)
+            for (int k = 0; k < 3; ++k) {
+                std::uint32_t a = cloth_.triangles[3 * t + k], b = cloth_.triangles[3 * t + (k + 1) % 3];
+                if (a > b) std::swap(a, b);
+                keys.push_back(std::uint64_t(a) << 32 | b);
+            }
+        std::sort(keys.begin(), keys.end());
+        keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+        // Particles joined by seams are one point of the garment, not a contact.
+        sc_sewn_ = sewn_representatives(cloth_.seams, n);
+        // Per particle: the points of the garment its triangles hold (sewn representatives, ascending).
+        sc_ring_start_.assign(n + 1, 0);
+        sc_ring_.clear();
+        std::vector<std::uint32_t> ring;
+        for (std::size_t u = 0; u < n; ++u) {
+            ring.clear();
+            for (std::uint32_t k = vertex_tri_offsets_[u]; k < vertex_tri_offsets_[u + 1]; ++k)
+                for (int c = 0; c < 3; ++c) ring.push_back(sc_sewn_[cloth_.triangles[3 * vertex_tris_[k] + c]]);
+            std::sort(ring.begin(), ring.end());
+            ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+            sc_ring_.insert(sc_ring_.end(), ring.begin(), ring.end());
+            sc_ring_start_[u + 1] = std::uint32_t(sc_ring_.size());
         }
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    // Particles joined by seams are one point of the garment, not a contact.
-    sc_sewn_ = sewn_representatives(cloth_.seams, n);
-    sc_edges_.resize(2 * keys.size());
-    for (std::size_t e = 0; e < keys.size(); ++e) {
-        sc_edges_[2 * e] = std::uint32_t(keys[e] >> 32);
-        sc_edges_[2 * e + 1] = std::uint32_t(keys[e] & 0xffffffffu);
+        sc_edges_.resize(2 * keys.size());
+        for (std::size_t e = 0; e < keys.size(); ++e) {
+            sc_edges_[2 * e] = std::uint32_t(keys[e] >> 32);
+            sc_edges_[2 * e + 1] = std::uint32_t(keys[e] & 0xffffffffu);
+        }
+        const std::size_t edges = keys.size();
+        // The mean rest length of the structural springs (of all springs if there are none) sizes the patches.
+        double sum = 0.0, all = 0.0;
+        std::size_t count = 0;
+        for (const Edge& e : cloth_.edges) {
+            all += e.rest;
+            if (e.kind == SpringKind::structural) sum += e.rest, ++count;
+        }
+        sc_mean_edge_ = count ? float(sum / double(count))
+                              : (cloth_.edges.empty() ? 0.0f : float(all / double(cloth_.edges.size())));
+        sc_tri_box_.assign(6 * tris, 0.0f);
+        sc_edge_box_.assign(6 * edges, 0.0f);
+        sc_acc_.assign(6 * n, 0);
+        sc_hits_.assign(n, 0);
+        sc_block_shortest_.assign((edges + sc_block - 1) / sc_block, 0.0f);
+        for (std::vector<float>* a : {&sc_snap_x_, &sc_snap_y_, &sc_snap_z_}) a->assign(n, 0.0f);
+        sc_block_moved_.assign((n + sc_block - 1) / sc_block, 0.0f);
+        sc_snap_step_ = SIZE_MAX;
     }
-    const std::size_t edges = keys.size();
-    const std::size_t tri_buckets = pow2_at_least(2 * tris), edge_buckets = pow2_at_least(2 * edges);
-    sc_tri_count_.assign(tri_buckets, 0);
-    sc_tri_start_.assign(tri_buckets + 1, 0);
-    sc_tri_items_.assign(8 * tris, 0);
-    sc_edge_count_.assign(edge_buckets, 0);
-    sc_edge_start_.assign(edge_buckets + 1, 0);
-    sc_edge_items_.assign(8 * edges, 0);
-    sc_tri_box_.assign(6 * tris, 0.0f);
-    sc_edge_box_.assign(6 * edges, 0.0f);
-    sc_acc_.assign(6 * n, 0);
-    sc_hits_.assign(n, 0);
-    sc_block_extremes_.assign(2 * ((edges + sc_block - 1) / sc_block), 0.0f);
-    for (std::vector<float>* a : {&sc_snap_x_, &sc_snap_y_, &sc_snap_z_}) a->assign(n, 0.0f);
-    sc_block_moved_.assign((n + sc_block - 1) / sc_block, 0.0f);
-    sc_snap_step_ = SIZE_MAX;
+    // The patches, sized for the thickness: cooked again when a new thickness wants another size.
+    const std::uint32_t target = self_collision_patch_target(params_.self_collision.thickness, sc_mean_edge_);
+    if (target == sc_patch_target_) return;
+    sc_patch_target_ = target;
+    sc_patches_ = cook_self_collision_patches(cloth_.triangles, n, sc_edges_, vertex_tri_offsets_, vertex_tris_, target);
+    const std::size_t patches = sc_patches_.count(), buckets = pow2_at_least(2 * patches);
+    sc_cell_count_.assign(buckets, 0);
+    sc_cell_start_.assign(buckets + 1, 0);
+    sc_cell_items_.assign(8 * patches, 0);
+    sc_patch_box_.assign(6 * patches, 0.0f);
+    sc_patch_cone_.assign(5 * patches, 0.0f);
+    sc_patch_calm_.assign(patches, 0);
 }
 
 template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out) {
@@ -167,7 +207,7 @@ template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out) {
 template <bool Parallel>
 std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, const float* y0, const float* z0,
                                            bool& deep) {
-    const std::size_t n = cloth_.particle_count, tris = cloth_.triangles.size() / 3, edges = sc_edges_.size() / 2;
+    const std::size_t n = cloth_.particle_count, edges = sc_edges_.size() / 2;
     const float h = params_.self_collision.thickness;
     const double hd = h, mu = params_.self_collision.friction;
     const bool verlet = params_.integrator == Integrator::verlet;
@@ -176,35 +216,28 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
     const std::uint32_t* edge = sc_edges_.data();
     const float* w = cloth_.inv_mass.data();
     float *x = out.x.data(), *y = out.y.data(), *z = out.z.data();
+    const SelfCollisionPatches& pa = sc_patches_;
+    const std::size_t patches = pa.count();
 
-    // Cell size: the longest edge now; the shortest decides whether 1-ring neighbours are exempt (per-block extremes,
-    // then the extremes of those: exact whatever the order).
+    // The shortest edge decides whether 1-ring neighbours are exempt (per-block minima, then the least of those:
+    // exact whatever the order).
     for_blocks<Parallel>(edges, [&](std::size_t begin, std::size_t end) {
-        float hi = 0.0f, lo = std::numeric_limits<float>::max();
+        float lo = std::numeric_limits<float>::max();
         for (std::size_t e = begin; e < end; ++e) {
             const std::uint32_t a = edge[2 * e], b = edge[2 * e + 1];
             const float dx = x[a] - x[b], dy = y[a] - y[b], dz = z[a] - z[b];
-            const float l2 = dx * dx + dy * dy + dz * dz;
-            hi = std::max(hi, l2);
-            lo = std::min(lo, l2);
+            lo = std::min(lo, dx * dx + dy * dy + dz * dz);
         }
-        sc_block_extremes_[2 * (begin / sc_block)] = hi;
-        sc_block_extremes_[2 * (begin / sc_block) + 1] = lo;
+        sc_block_shortest_[begin / sc_block] = lo;
     });
-    float longest2 = 0.0f, shortest2 = std::numeric_limits<float>::max();
-    for (std::size_t k = 0; k < sc_block_extremes_.size(); k += 2) {
-        longest2 = std::max(longest2, sc_block_extremes_[k]);
-        shortest2 = std::min(shortest2, sc_block_extremes_[k + 1]);
-    }
+    const float shortest2 = *std::min_element(sc_block_shortest_.begin(), sc_block_shortest_.end());
     // 1-ring neighbours (a point and a triangle one edge apart, two edges across one triangle) lie about 0.7 of an
     // edge apart on a flat cloth: within h of each other at rest once h > half the shortest edge. Only then are they
     // exempt; on a coarser cloth they are contacts like any other (a sharp crease needs them).
     const bool ring_exempt = h > 0.5f * std::sqrt(shortest2);
-    const float cell = 1.01f * (std::sqrt(longest2) + 2.0f * h);
-    const float inv_cell = 1.0f / cell;
-    auto cell_of = [&](float v) { return std::int64_t(std::floor(v * inv_cell)); };
 
-    // Boxes of every triangle (grown by h) and edge (grown by h / 2), computed once per round.
+    // Per patch: the boxes of its triangles (grown by h) and edges (grown by h / 2), in patch order; its own box;
+    // its cone of normals.
     auto box_of = [&](const std::uint32_t* v, int count, float grow, float* b) {
         b[0] = b[3] = x[v[0]], b[1] = b[4] = y[v[0]], b[2] = b[5] = z[v[0]];
         for (int k = 1; k < count; ++k) {
@@ -213,73 +246,113 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
         }
         for (int c = 0; c < 3; ++c) b[c] -= grow, b[3 + c] += grow;
     };
+    // A triangle's unit normal; its smallest altitude (twice its area over its longest edge) in `altitude`.
+    auto unit_normal = [&](std::uint32_t t, float nrm[3], float& altitude) {
+        const std::uint32_t* v = tri + 3 * t;
+        const float ax = x[v[1]] - x[v[0]], ay = y[v[1]] - y[v[0]], az = z[v[1]] - z[v[0]];
+        const float bx = x[v[2]] - x[v[0]], by = y[v[2]] - y[v[0]], bz = z[v[2]] - z[v[0]];
+        const float cx = bx - ax, cy = by - ay, cz = bz - az;
+        nrm[0] = ay * bz - az * by, nrm[1] = az * bx - ax * bz, nrm[2] = ax * by - ay * bx;
+        const float l = std::sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+        const float longest2 = std::max({ax * ax + ay * ay + az * az, bx * bx + by * by + bz * bz, cx * cx + cy * cy + cz * cz});
+        altitude = longest2 > 0.0f ? l / std::sqrt(longest2) : 0.0f;
+        if (!(l > 0.0f)) return false;
+        for (int c = 0; c < 3; ++c) nrm[c] /= l;
+        return true;
+    };
     float* tri_box = sc_tri_box_.data();
     float* edge_box = sc_edge_box_.data();
-    for_blocks<Parallel>(tris, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t t = begin; t < end; ++t) box_of(tri + 3 * t, 3, h, tri_box + 6 * t);
-    });
-    for_blocks<Parallel>(edges, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t e = begin; e < end; ++e) box_of(edge + 2 * e, 2, 0.5f * h, edge_box + 6 * e);
-    });
-    // The cells a box overlaps (at most 2 per axis: the box is shorter than a cell), as lo and count per axis.
-    auto span_of = [&](const float* b, std::int64_t lo[3], int cnt[3]) {
-        for (int c = 0; c < 3; ++c) {
-            lo[c] = cell_of(b[c]);
-            cnt[c] = cell_of(b[3 + c]) > lo[c] ? 2 : 1;
+    float* patch_box = sc_patch_box_.data();
+    float* cone = sc_patch_cone_.data();
+    constexpr float not_flat = 4.0f; // a half-angle above pi
+    for_blocks<Parallel>(patches, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t p = begin; p < end; ++p) {
+            float* pb = patch_box + 6 * p;
+            for (int c = 0; c < 3; ++c)
+                pb[c] = std::numeric_limits<float>::max(), pb[3 + c] = std::numeric_limits<float>::lowest();
+            float sum[3] = {0.0f, 0.0f, 0.0f}, lowest = std::numeric_limits<float>::max();
+            bool degenerate = pa.tri_start[p] == pa.tri_start[p + 1];
+            for (std::uint32_t s = pa.tri_start[p]; s < pa.tri_start[p + 1]; ++s) {
+                float* b = tri_box + 6 * s;
+                box_of(tri + 3 * pa.tris[s], 3, h, b);
+                for (int c = 0; c < 3; ++c) pb[c] = std::min(pb[c], b[c]), pb[3 + c] = std::max(pb[3 + c], b[3 + c]);
+                float nrm[3], altitude;
+                if (unit_normal(pa.tris[s], nrm, altitude)) {
+                    for (int c = 0; c < 3; ++c) sum[c] += nrm[c];
+                } else {
+                    degenerate = true;
+                }
+                lowest = std::min(lowest, altitude);
+            }
+            for (std::uint32_t s = pa.point_start[p]; s < pa.point_start[p + 1]; ++s) {
+                const std::uint32_t i = pa.points[s];
+                const float q[3] = {x[i], y[i], z[i]};
+                for (int c = 0; c < 3; ++c) pb[c] = std::min(pb[c], q[c] - h), pb[3 + c] = std::max(pb[3 + c], q[c] + h);
+            }
+            for (std::uint32_t s = pa.edge_start[p]; s < pa.edge_start[p + 1]; ++s)
+                box_of(edge + 2 * pa.edges[s], 2, 0.5f * h, edge_box + 6 * s);
+            float* cp = cone + 5 * p;
+            const float sl = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+            if (degenerate || !(sl > 0.0f)) {
+                cp[0] = cp[1] = cp[2] = 0.0f, cp[3] = not_flat, cp[4] = 0.0f;
+                continue;
+            }
+            for (int c = 0; c < 3; ++c) cp[c] = sum[c] / sl;
+            float least = 1.0f;
+            for (std::uint32_t s = pa.tri_start[p]; s < pa.tri_start[p + 1]; ++s) {
+                float nrm[3], altitude;
+                unit_normal(pa.tris[s], nrm, altitude);
+                least = std::min(least, nrm[0] * cp[0] + nrm[1] * cp[1] + nrm[2] * cp[2]);
+            }
+            cp[3] = std::acos(std::clamp(least, -1.0f, 1.0f));
+            cp[4] = lowest;
         }
+    });
+    // Flat pieces. On a piece of cloth whose normals all lie within an angle A of one axis (A < 90 degrees) the cloth
+    // is a graph over the plane normal to the axis: a path on it is at most 1 / cos A times longer than its shadow, so
+    // two of its primitives are at least cos A times the shortest path between them on the cloth apart. Primitives
+    // that are not a contact's exemptions (same point; 1-ring neighbours when ring_exempt) are, on the cloth, at least
+    // one triangle altitude apart (two when 1-ring neighbours are exempt). A patch is calm when it and every patch it
+    // touches form such a piece, none of them at the cloth's border (where a garment's panel can fold within its own
+    // plane: the underside of a sleeve against the side of the body), with A <= flat_cone and cos A times that
+    // distance, with the smallest altitude of the piece, above h. Then no pair of the patch, nor of it and a patch it
+    // touches, is closer than h; a pair of calm patches both touching a third calm patch neither.
+    const float rings = ring_exempt ? 2.0f : 1.0f;
+    auto angle_between = [&](std::uint32_t p, std::uint32_t q) {
+        const float *a = cone + 5 * p, *b = cone + 5 * q;
+        return std::acos(std::clamp(a[0] * b[0] + a[1] * b[1] + a[2] * b[2], -1.0f, 1.0f));
     };
-    // Counting sort of primitives into buckets (a primitive enters a bucket once even if two cells share it).
-    auto build = [&](std::vector<std::uint32_t>& count, std::vector<std::uint32_t>& first,
-                     std::vector<std::uint32_t>& items, const float* boxes, std::size_t prims) {
-        const std::uint32_t mask = std::uint32_t(count.size() - 1);
-        std::fill(count.begin(), count.end(), 0u);
-        auto each_bucket = [&](std::size_t p, auto&& f) {
-            std::int64_t lo[3];
-            int cnt[3];
-            span_of(boxes + 6 * p, lo, cnt);
-            std::uint32_t seen[8];
-            int nseen = 0;
-            for (int i = 0; i < cnt[0]; ++i)
-                for (int j = 0; j < cnt[1]; ++j)
-                    for (int k = 0; k < cnt[2]; ++k) {
-                        const std::uint32_t bk = bucket_of(lo[0] + i, lo[1] + j, lo[2] + k, mask);
-                        if (std::find(seen, seen + nseen, bk) != seen + nseen) continue;
-                        seen[nseen++] = bk;
-                        f(bk);
-                    }
-        };
-        for_blocks<Parallel>(prims, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t p = begin; p < end; ++p)
-                each_bucket(p, [&](std::uint32_t bk) {
-                    std::atomic_ref<std::uint32_t>(count[bk]).fetch_add(1, std::memory_order_relaxed);
-                });
-        });
-        first[0] = 0;
-        for (std::size_t k = 0; k < count.size(); ++k) {
-            first[k + 1] = first[k] + count[k];
-            count[k] = first[k]; // now the bucket's fill cursor
+    std::uint8_t* calm = sc_patch_calm_.data();
+    for_blocks<Parallel>(patches, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t pi = begin; pi < end; ++pi) {
+            const std::uint32_t p = std::uint32_t(pi);
+            bool ok = !pa.on_border[p] && cone[5 * p + 3] <= flat_cone;
+            float angle = cone[5 * p + 3], lowest = cone[5 * p + 4];
+            for (std::uint32_t k = pa.adj_start[p]; ok && k < pa.adj_start[p + 1]; ++k) {
+                const std::uint32_t r = pa.adj[k];
+                ok = !pa.on_border[r] && cone[5 * r + 3] <= flat_cone;
+                angle = std::max(angle, angle_between(p, r) + cone[5 * r + 3]);
+                lowest = std::min(lowest, cone[5 * r + 4]);
+            }
+            calm[p] = ok && angle <= flat_cone && std::cos(angle) * rings * lowest > h;
         }
-        for_blocks<Parallel>(prims, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t p = begin; p < end; ++p)
-                each_bucket(p, [&](std::uint32_t bk) {
-                    const std::uint32_t at =
-                        std::atomic_ref<std::uint32_t>(count[bk]).fetch_add(1, std::memory_order_relaxed);
-                    items[at] = std::uint32_t(p);
-                });
-        });
+    });
+    auto touching = [&](std::uint32_t p, std::uint32_t q) {
+        return std::binary_search(pa.adj.begin() + pa.adj_start[p], pa.adj.begin() + pa.adj_start[p + 1], q);
     };
-    build(sc_tri_count_, sc_tri_start_, sc_tri_items_, tri_box, tris);
-    build(sc_edge_count_, sc_edge_start_, sc_edge_items_, edge_box, edges);
+    auto on_flat_piece = [&](std::uint32_t p, std::uint32_t q) {
+        if (!calm[p] || !calm[q]) return false;
+        if (touching(p, q)) return true;
+        for (std::uint32_t k = pa.adj_start[p]; k < pa.adj_start[p + 1]; ++k)
+            if (calm[pa.adj[k]] && touching(pa.adj[k], q)) return true;
+        return false;
+    };
 
     // The same point of the garment (the same particle, or particles sewn together), or 1-ring neighbours across
     // that: a triangle of u holds v or a particle sewn to v (or the other way round).
     const std::uint32_t* sewn = sc_sewn_.data();
     auto ring = [&](std::uint32_t u, std::uint32_t v) {
-        for (std::uint32_t k = vertex_tri_offsets_[u]; k < vertex_tri_offsets_[u + 1]; ++k) {
-            const std::uint32_t* t = tri + 3 * vertex_tris_[k];
-            if (sewn[t[0]] == sewn[v] || sewn[t[1]] == sewn[v] || sewn[t[2]] == sewn[v]) return true;
-        }
-        return false;
+        return std::binary_search(sc_ring_.begin() + sc_ring_start_[u], sc_ring_.begin() + sc_ring_start_[u + 1], sewn[v]);
     };
     auto near = [&](std::uint32_t u, std::uint32_t v) {
         if (sewn[u] == sewn[v]) return true;
@@ -333,103 +406,208 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
         return true;
     };
 
-    std::atomic<std::size_t> contacts{0};
     const double h2 = hd * hd;
-    // Point-triangle: each particle against the triangles in its cell's bucket.
-    const std::uint32_t tri_mask = std::uint32_t(sc_tri_count_.size() - 1);
-    for_blocks<Parallel>(n, [&](std::size_t begin, std::size_t end) {
-        std::size_t local = 0;
-        for (std::size_t pi = begin; pi < end; ++pi) {
-            const std::uint32_t p = std::uint32_t(pi);
-            const float px = x[p], py = y[p], pz = z[p];
-            const std::uint32_t bk = bucket_of(cell_of(px), cell_of(py), cell_of(pz), tri_mask);
-            for (std::uint32_t k = sc_tri_start_[bk]; k < sc_tri_start_[bk + 1]; ++k) {
-                const std::uint32_t t = sc_tri_items_[k];
-                const std::uint32_t* tv = tri + 3 * t;
-                if (tv[0] == p || tv[1] == p || tv[2] == p) continue;
-                if (w[p] == 0.0f && w[tv[0]] == 0.0f && w[tv[1]] == 0.0f && w[tv[2]] == 0.0f) continue;
-                const float* b = tri_box + 6 * t;
-                if (px < b[0] || px > b[3] || py < b[1] || py > b[4] || pz < b[2] || pz > b[5]) continue;
-                const V3 P = pos(p), A = pos(tv[0]), B = pos(tv[1]), C = pos(tv[2]);
-                const std::array<double, 3> bc = geom::closest_on_triangle(P, A, B, C);
-                const V3 q = bc[0] * A + bc[1] * B + bc[2] * C;
-                const V3 diff = P - q;
-                if (geom::dot(diff, diff) >= h2) continue;
-                if (near(p, tv[0]) || near(p, tv[1]) || near(p, tv[2])) continue;
-                V3 nrm = cross(B - A, C - A);
-                const double nl = geom::norm(nrm);
-                if (!(nl > 0.0)) continue;
-                nrm = (1.0 / nl) * nrm;
-                // The side at the start of the step (the plane of the triangle then).
-                const V3 A0 = pos0(tv[0]);
-                const double side = geom::dot(pos0(p) - A0, cross(pos0(tv[1]) - A0, pos0(tv[2]) - A0));
-                const double s = side > 0.0 ? 1.0 : (side < 0.0 ? -1.0 : (geom::dot(diff, nrm) >= 0.0 ? 1.0 : -1.0));
-                nrm = s * nrm;
-                const std::uint32_t v[4] = {p, tv[0], tv[1], tv[2]};
-                const double alpha[4] = {1.0, -bc[0], -bc[1], -bc[2]};
-                if (respond(v, alpha, 4, nrm, geom::dot(diff, nrm))) ++local;
+    // Point p against the triangle in patch slot s (box tri_box + 6 s): 1 when it was a contact.
+    auto point_triangle = [&](std::uint32_t p, std::uint32_t s) -> std::size_t {
+        const float* b = tri_box + 6 * std::size_t(s);
+        const float px = x[p], py = y[p], pz = z[p];
+        if (px < b[0] || px > b[3] || py < b[1] || py > b[4] || pz < b[2] || pz > b[5]) return 0;
+        const std::uint32_t* tv = tri + 3 * pa.tris[s];
+        if (tv[0] == p || tv[1] == p || tv[2] == p) return 0;
+        if (w[p] == 0.0f && w[tv[0]] == 0.0f && w[tv[1]] == 0.0f && w[tv[2]] == 0.0f) return 0;
+        if (near(p, tv[0]) || near(p, tv[1]) || near(p, tv[2])) return 0;
+        const V3 P = pos(p), A = pos(tv[0]), B = pos(tv[1]), C = pos(tv[2]);
+        const std::array<double, 3> bc = geom::closest_on_triangle(P, A, B, C);
+        const V3 q = bc[0] * A + bc[1] * B + bc[2] * C;
+        const V3 diff = P - q;
+        if (geom::dot(diff, diff) >= h2) return 0;
+        V3 nrm = cross(B - A, C - A);
+        const double nl = geom::norm(nrm);
+        if (!(nl > 0.0)) return 0;
+        nrm = (1.0 / nl) * nrm;
+        // The side at the start of the step (the plane of the triangle then).
+        const V3 A0 = pos0(tv[0]);
+        const double side = geom::dot(pos0(p) - A0, cross(pos0(tv[1]) - A0, pos0(tv[2]) - A0));
+        const double sg = side > 0.0 ? 1.0 : (side < 0.0 ? -1.0 : (geom::dot(diff, nrm) >= 0.0 ? 1.0 : -1.0));
+        nrm = sg * nrm;
+        const std::uint32_t v[4] = {p, tv[0], tv[1], tv[2]};
+        const double alpha[4] = {1.0, -bc[0], -bc[1], -bc[2]};
+        return respond(v, alpha, 4, nrm, geom::dot(diff, nrm)) ? 1 : 0;
+    };
+    // The edges in patch slots a and b: 1 when they were a contact. Taken in the order of their indices, so that the
+    // rounding of the response does not depend on how the cloth was cut into patches.
+    auto edge_edge = [&](std::uint32_t a, std::uint32_t b) -> std::size_t {
+        if (pa.edges[a] > pa.edges[b]) std::swap(a, b);
+        const float *be = edge_box + 6 * std::size_t(a), *bf = edge_box + 6 * std::size_t(b);
+        if (be[3] < bf[0] || bf[3] < be[0] || be[4] < bf[1] || bf[4] < be[1] || be[5] < bf[2] || bf[5] < be[2])
+            return 0;
+        const std::uint32_t *ev = edge + 2 * pa.edges[a], *fv = edge + 2 * pa.edges[b];
+        if (fv[0] == ev[0] || fv[0] == ev[1] || fv[1] == ev[0] || fv[1] == ev[1]) return 0;
+        if (w[ev[0]] == 0.0f && w[ev[1]] == 0.0f && w[fv[0]] == 0.0f && w[fv[1]] == 0.0f) return 0;
+        if (near(ev[0], fv[0]) || near(ev[0], fv[1]) || near(ev[1], fv[0]) || near(ev[1], fv[1])) return 0;
+        const V3 P1 = pos(ev[0]), Q1 = pos(ev[1]), P2 = pos(fv[0]), Q2 = pos(fv[1]);
+        double s = 0.0, t = 0.0;
+        geom::closest_segments(P1, Q1, P2, Q2, s, t);
+        const V3 diff = (P1 + s * (Q1 - P1)) - (P2 + t * (Q2 - P2));
+        const double dist2 = geom::dot(diff, diff);
+        if (dist2 >= h2) return 0;
+        // Orientation: the same closest points at the start of the step.
+        const V3 a0 = pos0(ev[0]), b0 = pos0(ev[1]), c0 = pos0(fv[0]), d0 = pos0(fv[1]);
+        const V3 diff0 = (a0 + s * (b0 - a0)) - (c0 + t * (d0 - c0));
+        const double dist = std::sqrt(dist2), dist0 = geom::norm(diff0);
+        V3 nrm;
+        constexpr double tiny = 1e-12;
+        if (dist > tiny) {
+            nrm = (1.0 / dist) * diff;
+            if (geom::dot(nrm, diff0) < 0.0) nrm = -1.0 * nrm; // crossed during the step
+        } else if (dist0 > tiny) {
+            nrm = (1.0 / dist0) * diff0;
+        } else {
+            return 0; // touching now and then: no side to restore
+        }
+        const std::uint32_t v[4] = {ev[0], ev[1], fv[0], fv[1]};
+        const double alpha[4] = {1.0 - s, s, -(1.0 - t), -t};
+        return respond(v, alpha, 4, nrm, geom::dot(diff, nrm)) ? 1 : 0;
+    };
+    // Every pair of patches p <= q: the points of each against the triangles of the other, the edges against the
+    // edges (p == q: each pair of its own once). Of two different patches only the points and edges inside the other
+    // patch's box can be near it: those are gathered first.
+    auto inside = [](const float* b, float px, float py, float pz) {
+        return px >= b[0] && px <= b[3] && py >= b[1] && py <= b[4] && pz >= b[2] && pz <= b[5];
+    };
+    auto overlap = [](const float* a, const float* b) {
+        return a[3] >= b[0] && b[3] >= a[0] && a[4] >= b[1] && b[4] >= a[1] && a[5] >= b[2] && b[5] >= a[2];
+    };
+    auto patch_pair = [&](std::uint32_t p, std::uint32_t q) -> std::size_t {
+        std::size_t found = 0;
+        if (p == q) {
+            for (std::uint32_t i = pa.point_start[p]; i < pa.point_start[p + 1]; ++i)
+                for (std::uint32_t s = pa.tri_start[p]; s < pa.tri_start[p + 1]; ++s) found += point_triangle(pa.points[i], s);
+            for (std::uint32_t e = pa.edge_start[p]; e < pa.edge_start[p + 1]; ++e)
+                for (std::uint32_t f = e + 1; f < pa.edge_start[p + 1]; ++f) found += edge_edge(e, f);
+            return found;
+        }
+        // The candidates of one side gathered into short arrays (coordinates or box bounds), so that the test of a
+        // primitive of the other side against all of them is a loop the compiler vectorises; the narrow phase runs
+        // for the hits. (The same for a patch's own pairs measured no faster: kept plain.)
+        constexpr std::size_t cap = 3 * self_collision_patch_max;
+        alignas(64) float c[6][cap];
+        alignas(64) std::uint8_t hit[cap];
+        std::uint32_t id[cap];
+        for (int side = 0; side < 2; ++side) {
+            const std::uint32_t a = side == 0 ? p : q, b = side == 0 ? q : p;
+            const float* bb = patch_box + 6 * b;
+            std::size_t m = 0;
+            for (std::uint32_t i = pa.point_start[a]; i < pa.point_start[a + 1]; ++i) {
+                const std::uint32_t v = pa.points[i];
+                if (!inside(bb, x[v], y[v], z[v])) continue;
+                c[0][m] = x[v], c[1][m] = y[v], c[2][m] = z[v], id[m++] = v;
+            }
+            if (m == 0) continue;
+            for (std::uint32_t s = pa.tri_start[b]; s < pa.tri_start[b + 1]; ++s) {
+                const float* tb = tri_box + 6 * std::size_t(s);
+                if (!overlap(tb, patch_box + 6 * a)) continue;
+                for (std::size_t i = 0; i < m; ++i)
+                    hit[i] = (c[0][i] >= tb[0]) & (c[0][i] <= tb[3]) & (c[1][i] >= tb[1]) & (c[1][i] <= tb[4]) &
+                             (c[2][i] >= tb[2]) & (c[2][i] <= tb[5]);
+                for (std::size_t i = 0; i < m; ++i)
+                    if (hit[i]) found += point_triangle(id[i], s);
             }
         }
-        if (local) contacts.fetch_add(local, std::memory_order_relaxed);
-    });
-    // Edge-edge: each edge against the higher-numbered edges in the buckets of its cells.
-    const std::uint32_t edge_mask = std::uint32_t(sc_edge_count_.size() - 1);
-    for_blocks<Parallel>(edges, [&](std::size_t begin, std::size_t end) {
-        std::size_t local = 0;
-        for (std::size_t e = begin; e < end; ++e) {
-            const std::uint32_t* ev = edge + 2 * e;
-            const float* be = edge_box + 6 * e;
+        std::size_t m = 0;
+        for (std::uint32_t e = pa.edge_start[p]; e < pa.edge_start[p + 1]; ++e) {
+            const float* eb = edge_box + 6 * std::size_t(e);
+            if (!overlap(eb, patch_box + 6 * q)) continue;
+            for (int k = 0; k < 6; ++k) c[k][m] = eb[k];
+            id[m++] = e;
+        }
+        if (m == 0) return found;
+        for (std::uint32_t f = pa.edge_start[q]; f < pa.edge_start[q + 1]; ++f) {
+            const float* fb = edge_box + 6 * std::size_t(f);
+            if (!overlap(fb, patch_box + 6 * p)) continue;
+            for (std::size_t i = 0; i < m; ++i)
+                hit[i] = (c[3][i] >= fb[0]) & (fb[3] >= c[0][i]) & (c[4][i] >= fb[1]) & (fb[4] >= c[1][i]) &
+                         (c[5][i] >= fb[2]) & (fb[5] >= c[2][i]);
+            for (std::size_t i = 0; i < m; ++i)
+                if (hit[i]) found += edge_edge(id[i], f);
+        }
+        return found;
+    };
+
+    std::atomic<std::size_t> contacts{0};
+    if (sc_reference_) {
+        // The reference: every pair of the cloth, through the same narrow phase (slots cover every particle,
+        // triangle and edge once).
+        std::size_t found = 0;
+        for (std::uint32_t i = 0; i < pa.points.size(); ++i)
+            for (std::uint32_t s = 0; s < pa.tris.size(); ++s) found += point_triangle(pa.points[i], s);
+        for (std::uint32_t e = 0; e < pa.edges.size(); ++e)
+            for (std::uint32_t f = e + 1; f < pa.edges.size(); ++f) found += edge_edge(e, f);
+        contacts.store(found);
+    } else {
+        // Spatial hash of the patches: cubic cells as wide as the widest patch box, so a box spans at most 2 cells
+        // an axis; counting sort (serial: there are about 30 times fewer patches than particles).
+        float widest = 0.0f;
+        for (std::size_t p = 0; p < patches; ++p)
+            for (int c = 0; c < 3; ++c) widest = std::max(widest, patch_box[6 * p + 3 + c] - patch_box[6 * p + c]);
+        const float inv_cell = 1.0f / (1.01f * widest);
+        auto cell_of = [&](float v) { return std::int64_t(std::floor(v * inv_cell)); };
+        const std::uint32_t mask = std::uint32_t(sc_cell_count_.size() - 1);
+        auto each_bucket = [&](std::size_t p, auto&& f) {
+            const float* b = patch_box + 6 * p;
             std::int64_t lo[3];
             int cnt[3];
-            span_of(be, lo, cnt);
+            for (int c = 0; c < 3; ++c) lo[c] = cell_of(b[c]), cnt[c] = cell_of(b[3 + c]) > lo[c] ? 2 : 1;
+            std::uint32_t seen[8];
+            int nseen = 0;
             for (int i = 0; i < cnt[0]; ++i)
                 for (int j = 0; j < cnt[1]; ++j)
-                    for (int kk = 0; kk < cnt[2]; ++kk) {
-                        const std::int64_t cellc[3] = {lo[0] + i, lo[1] + j, lo[2] + kk};
-                        const std::uint32_t bk = bucket_of(cellc[0], cellc[1], cellc[2], edge_mask);
-                        for (std::uint32_t k = sc_edge_start_[bk]; k < sc_edge_start_[bk + 1]; ++k) {
-                            const std::uint32_t f = sc_edge_items_[k];
-                            if (f <= e) continue;
-                            const float* bf = edge_box + 6 * f;
-                            if (be[3] < bf[0] || bf[3] < be[0] || be[4] < bf[1] || bf[4] < be[1] || be[5] < bf[2] ||
-                                bf[5] < be[2])
-                                continue;
-                            if (cell_of(std::max(be[0], bf[0])) != cellc[0] || cell_of(std::max(be[1], bf[1])) != cellc[1] ||
-                                cell_of(std::max(be[2], bf[2])) != cellc[2])
-                                continue;
-                            const std::uint32_t* fv = edge + 2 * f;
-                            if (fv[0] == ev[0] || fv[0] == ev[1] || fv[1] == ev[0] || fv[1] == ev[1]) continue;
-                            if (w[ev[0]] == 0.0f && w[ev[1]] == 0.0f && w[fv[0]] == 0.0f && w[fv[1]] == 0.0f) continue;
-                            const V3 P1 = pos(ev[0]), Q1 = pos(ev[1]), P2 = pos(fv[0]), Q2 = pos(fv[1]);
-                            double s = 0.0, t = 0.0;
-                            geom::closest_segments(P1, Q1, P2, Q2, s, t);
-                            const V3 diff = (P1 + s * (Q1 - P1)) - (P2 + t * (Q2 - P2));
-                            const double dist2 = geom::dot(diff, diff);
-                            if (dist2 >= h2) continue;
-                            if (near(ev[0], fv[0]) || near(ev[0], fv[1]) || near(ev[1], fv[0]) || near(ev[1], fv[1]))
-                                continue;
-                            // Orientation: the same closest points at the start of the step.
-                            const V3 a0 = pos0(ev[0]), b0 = pos0(ev[1]), c0 = pos0(fv[0]), d0 = pos0(fv[1]);
-                            const V3 diff0 = (a0 + s * (b0 - a0)) - (c0 + t * (d0 - c0));
-                            const double dist = std::sqrt(dist2), dist0 = geom::norm(diff0);
-                            V3 nrm;
-                            constexpr double tiny = 1e-12;
-                            if (dist > tiny) {
-                                nrm = (1.0 / dist) * diff;
-                                if (geom::dot(nrm, diff0) < 0.0) nrm = -1.0 * nrm; // crossed during the step
-                            } else if (dist0 > tiny) {
-                                nrm = (1.0 / dist0) * diff0;
-                            } else {
-                                continue; // touching now and then: no side to restore
-                            }
-                            const std::uint32_t v[4] = {ev[0], ev[1], fv[0], fv[1]};
-                            const double alpha[4] = {1.0 - s, s, -(1.0 - t), -t};
-                            if (respond(v, alpha, 4, nrm, geom::dot(diff, nrm))) ++local;
-                        }
+                    for (int k = 0; k < cnt[2]; ++k) {
+                        const std::uint32_t bk = bucket_of(lo[0] + i, lo[1] + j, lo[2] + k, mask);
+                        f(bk, std::find(seen, seen + nseen, bk) != seen + nseen); // again: seen for another cell
+                        seen[nseen++] = bk;
                     }
+        };
+        std::fill(sc_cell_count_.begin(), sc_cell_count_.end(), 0u);
+        for (std::size_t p = 0; p < patches; ++p)
+            each_bucket(p, [&](std::uint32_t bk, bool again) { sc_cell_count_[bk] += again ? 0 : 1; });
+        sc_cell_start_[0] = 0;
+        for (std::size_t k = 0; k < sc_cell_count_.size(); ++k) {
+            sc_cell_start_[k + 1] = sc_cell_start_[k] + sc_cell_count_[k];
+            sc_cell_count_[k] = sc_cell_start_[k]; // now the bucket's fill cursor
         }
-        if (local) contacts.fetch_add(local, std::memory_order_relaxed);
-    });
+        for (std::size_t p = 0; p < patches; ++p)
+            each_bucket(p, [&](std::uint32_t bk, bool again) {
+                if (!again) sc_cell_items_[sc_cell_count_[bk]++] = std::uint32_t(p);
+            });
+        for_blocks<Parallel>(patches, [&](std::size_t begin, std::size_t end) {
+            std::size_t local = 0;
+            for (std::size_t pi = begin; pi < end; ++pi) {
+                const std::uint32_t p = std::uint32_t(pi);
+                if (!calm[p]) local += patch_pair(p, p);
+                const float* bp = patch_box + 6 * p;
+                each_bucket(p, [&](std::uint32_t bk, bool again) {
+                    if (again) return; // this bucket was searched for another of p's cells
+                    for (std::uint32_t k = sc_cell_start_[bk]; k < sc_cell_start_[bk + 1]; ++k) {
+                        const std::uint32_t q = sc_cell_items_[k];
+                        if (q <= p) continue;
+                        const float* bq = patch_box + 6 * q;
+                        if (bp[3] < bq[0] || bq[3] < bp[0] || bp[4] < bq[1] || bq[4] < bp[1] || bp[5] < bq[2] ||
+                            bq[5] < bp[2])
+                            continue;
+                        // The pair once: where the low corner of the two boxes' intersection lies (in p's cells
+                        // and in q's, so q is in that cell's bucket).
+                        const std::int64_t corner[3] = {cell_of(std::max(bp[0], bq[0])), cell_of(std::max(bp[1], bq[1])),
+                                                        cell_of(std::max(bp[2], bq[2]))};
+                        if (bucket_of(corner[0], corner[1], corner[2], mask) != bk) continue;
+                        if (on_flat_piece(p, q)) continue;
+                        local += patch_pair(p, q);
+                    }
+                });
+            }
+            if (local) contacts.fetch_add(local, std::memory_order_relaxed);
+        });
+    }
     const std::size_t found = contacts.load();
     deep = deep_any.load();
     if (found == 0) return 0;

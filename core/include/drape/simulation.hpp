@@ -134,6 +134,18 @@ struct Health {
     HealthFigures monitor;              ///< the monitor's last check: figures, bounds, healthy
 };
 
+/// Self-collision's patches (core/src/self_collide_patches.cpp), cooked once: compact connected pieces of the cloth's
+/// triangles, each with the particles and edges it owns and the patches it touches (all CSR: entries of patch p lie
+/// in [start[p], start[p + 1])). Patches past the last one with triangles hold particles in no triangle.
+struct SelfCollisionPatches {
+    std::vector<std::uint32_t> tri_start, tris;     ///< triangles
+    std::vector<std::uint32_t> point_start, points; ///< particles (each in exactly one patch)
+    std::vector<std::uint32_t> edge_start, edges;   ///< edges, as indices into the stage's edge list (each in one)
+    std::vector<std::uint32_t> adj_start, adj;      ///< patches sharing a particle with it, ascending, not itself
+    std::vector<std::uint8_t> on_border;            ///< 1: a triangle of it has an edge no other triangle has
+    std::size_t count() const noexcept { return point_start.empty() ? 0 : point_start.size() - 1; }
+};
+
 /// Per-stage names in step order; the same strings label bench counters and profiler zones.
 enum class Stage : std::uint8_t { aero_forces, seam_forces, external_forces, spring_forces, integrate, strain_limit, collide, self_collide, count };
 const char* stage_name(Stage stage) noexcept;
@@ -227,6 +239,9 @@ class Simulation {
     /// Steps in which the self-collision stage ran since construction (it skips a step in which no particle has moved
     /// a quarter of the thickness since its last run).
     std::size_t self_collision_runs() const noexcept { return sc_runs_; }
+    /// For tests: when on, the self-collision stage tests every pair of the cloth (point-triangle and edge-edge, no
+    /// patches, no culling): the reference its broad phase is checked against. O(n^2): small cloths only.
+    void set_self_collision_reference(bool on) noexcept { sc_reference_ = on; }
     /// The implicit solver's cooked data of the cloth itself (empty until the implicit solver is first chosen).
     const VbdGraph& vbd_graph() const noexcept;
 
@@ -331,22 +346,30 @@ class Simulation {
     std::vector<float> core_measure_; ///< per collider, per particle: core_measure (triangle_contact.hpp)
     void cook_triangle_contact();
     void cook_vertex_triangles();
-    // Self-collision (self_collide.cpp; cooked when first enabled): the cloth's unique edges, a spatial hash of
-    // triangles and of edges rebuilt every round from the positions (counting sort into buckets: sizes fixed at
-    // cooking, at most 8 cells per primitive), and per particle fixed-point accumulators of the pushes (integer sums
-    // are exact, so the result does not depend on the order in which threads add).
+    // Self-collision (self_collide.cpp; cooked when first enabled): the cloth's unique edges, its patches, per round
+    // the boxes of every triangle and edge (in patch order), each patch's box and cone of normals and a spatial hash
+    // of the patches (counting sort into buckets: sizes fixed at cooking, at most 8 cells per patch), and per particle
+    // fixed-point accumulators of the pushes (integer sums are exact, so the result does not depend on the order in
+    // which threads add).
     template <bool Parallel> void self_collide_stage(StateBuffer& out);
     template <bool Parallel>
     std::size_t self_collide_round(StateBuffer& out, const float* x0, const float* y0, const float* z0, bool& deep);
     void cook_self_collision();
     std::vector<std::uint32_t> sc_edges_;            ///< 2 per edge, a < b
     std::vector<std::uint32_t> sc_sewn_; ///< per particle: the lowest particle sewn to it through seams (itself if none)
-    std::vector<std::uint32_t> sc_tri_count_, sc_tri_start_, sc_tri_items_;   ///< bucket counts, starts, triangles
-    std::vector<std::uint32_t> sc_edge_count_, sc_edge_start_, sc_edge_items_; ///< the same for edges
-    std::vector<float> sc_tri_box_, sc_edge_box_; ///< per triangle / edge: its grown box (lo xyz, hi xyz)
+    std::vector<std::uint32_t> sc_ring_start_, sc_ring_; ///< per particle: sc_sewn_ of its triangles' particles (CSR)
+    SelfCollisionPatches sc_patches_;
+    std::uint32_t sc_patch_target_ = 0; ///< triangles per patch the patches were cooked for (0: none yet)
+    float sc_mean_edge_ = 0.0f;         ///< m: mean rest length of the structural springs (sizes the patches)
+    std::vector<std::uint32_t> sc_cell_count_, sc_cell_start_, sc_cell_items_; ///< bucket counts, starts, patches
+    std::vector<float> sc_tri_box_, sc_edge_box_; ///< per triangle / edge in patch order: its grown box (lo, hi xyz)
+    std::vector<float> sc_patch_box_;   ///< per patch: the box of its triangles' grown boxes and its particles +- h
+    std::vector<float> sc_patch_cone_;  ///< per patch: unit axis (3), half-angle (rad; > pi: none), least altitude (m)
+    std::vector<std::uint8_t> sc_patch_calm_; ///< per patch: it and the patches it touches lie flat (self_collide.cpp)
+    bool sc_reference_ = false;         ///< set_self_collision_reference
     std::vector<std::int64_t> sc_acc_;  ///< per particle: dx, dy, dz, dvx, dvy, dvz (fixed point)
     std::vector<std::uint32_t> sc_hits_; ///< per particle: contacts that pushed it
-    std::vector<float> sc_block_extremes_;    ///< per block of edges: the longest and shortest edge, squared
+    std::vector<float> sc_block_shortest_;    ///< per block of edges: the shortest edge, squared
     std::size_t sc_contacts_ = 0;        ///< contacts applied in the last run's first round (self_contacts)
     // The snapshot of the last run (positions after its pushes, and the step it ended): the stage runs again only once
     // some particle has moved more than a quarter of the thickness from it, and takes each pair's side from it.
