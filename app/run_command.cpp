@@ -97,7 +97,13 @@ int run_command(const RunOptions& o) {
     if (o.stiffness) spec.stiffness = *o.stiffness;
     if (o.damping) spec.damping_ratio = *o.damping;
     if (o.drag) spec.physics.air_drag = *o.drag;
-    apply_solver_flags(spec, {o.solver, o.iterations, o.tolerance, o.integrator, o.strain_limit, o.fas, o.single_level});
+    apply_solver_flags(spec, {.solver = o.solver,
+                              .iterations = o.iterations,
+                              .tolerance = o.tolerance,
+                              .integrator = o.integrator,
+                              .strain_limit = o.strain_limit,
+                              .fas = o.fas,
+                              .single_level = o.single_level});
     const bool implicit = spec.physics.solver == Solver::implicit;
     if (o.wind) spec.physics.wind.enabled = true;
     if (o.aero) spec.physics.aero.enabled = true;

@@ -77,8 +77,13 @@ Viewer::Viewer(const ViewOptions& options) : options_(options) {
     // The scene first: a bad --scene or --size is reported before any window opens.
     session_ = std::make_unique<ViewSession>(options.scene, options.size, options.threads, options.substeps,
                                              options.material,
-                                             SolverFlags{options.solver, options.iterations, options.tolerance, {}, options.strain_limit,
-                                                         false, options.single_level},
+                                             SolverFlags{.solver = options.solver,
+                                                         .iterations = options.iterations,
+                                                         .tolerance = options.tolerance,
+                                                         .integrator = {}, // the viewer has no --integrator
+                                                         .strain_limit = options.strain_limit,
+                                                         .fas = false, // nor --fas
+                                                         .single_level = options.single_level},
                                              options.dt);
     show_ui_ = options.ui;
     scripted_mouse = options.demo_grab;
