@@ -56,6 +56,7 @@ using geom::V3;
 
 constexpr double fixed_scale = 4294967296.0; // 2^32
 constexpr int self_collide_rounds = 3;        // most rounds per step (a second one only after a deep push)
+constexpr int self_collide_substeps = 32;     // most parts a run cuts the motion since its last run into
 constexpr double settled = 0.01;              // a pair within 1% of the thickness, not approaching: no contact
 constexpr std::size_t sc_block = 256;         // particles / primitives per parallel task
 constexpr float flat_cone = 1.0471976f;       // 60 degrees: the widest cone of normals a flat piece may have
@@ -138,7 +139,9 @@ void Simulation::cook_self_collision() {
         sc_acc_.assign(6 * n, 0);
         sc_hits_.assign(n, 0);
         sc_block_shortest_.assign((edges + sc_block - 1) / sc_block, 0.0f);
-        for (std::vector<float>* a : {&sc_snap_x_, &sc_snap_y_, &sc_snap_z_}) a->assign(n, 0.0f);
+        for (std::vector<float>* a : {&sc_snap_x_, &sc_snap_y_, &sc_snap_z_, &sc_end_x_, &sc_end_y_, &sc_end_z_,
+                                      &sc_side_x_, &sc_side_y_, &sc_side_z_})
+            a->assign(n, 0.0f);
         sc_block_moved_.assign((n + sc_block - 1) / sc_block, 0.0f);
         sc_snap_step_ = SIZE_MAX;
     }
@@ -164,37 +167,71 @@ template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out) {
     // steps_done_ has not been advanced for this step yet: the snapshot is of this trajectory when it was taken at or
     // before the end of the previous step (the health monitor's restore moves steps_done_ back before it).
     const bool snapshot = sc_snap_step_ != SIZE_MAX && sc_snap_step_ <= steps_done_;
-    if (snapshot) {
-        // The largest move of any particle since the snapshot (per block, then the largest of those: exact in any
-        // order). Below a quarter of the thickness no two particles can have crossed a gap of half of it, and every
-        // pair closer than that was pushed to the thickness at the snapshot: nothing to do.
-        const float *x = out.x.data(), *y = out.y.data(), *z = out.z.data();
-        const float *sx = sc_snap_x_.data(), *sy = sc_snap_y_.data(), *sz = sc_snap_z_.data();
-        float* moved = sc_block_moved_.data();
-        for_blocks<Parallel>(n, [&](std::size_t begin, std::size_t end) {
-            float m = 0.0f;
-            for (std::size_t i = begin; i < end; ++i) {
-                const float dx = x[i] - sx[i], dy = y[i] - sy[i], dz = z[i] - sz[i];
-                m = std::max(m, dx * dx + dy * dy + dz * dz);
-            }
-            moved[begin / sc_block] = m;
-        });
-        const float most = *std::max_element(sc_block_moved_.begin(), sc_block_moved_.end());
-        if (most <= 0.0625f * h * h) return;
-    }
-    // Each pair's side: from the snapshot, or (none yet) from the start of this step.
+    // Where the motion this run covers starts (and each pair's side comes from): the snapshot, or (none yet) the
+    // start of this step.
     const StateBuffer& start = buffers_[current_];
-    const float* x0 = snapshot ? sc_snap_x_.data() : start.x.data();
-    const float* y0 = snapshot ? sc_snap_y_.data() : start.y.data();
-    const float* z0 = snapshot ? sc_snap_z_.data() : start.z.data();
-    std::size_t total = 0;
-    for (int round = 0; round < self_collide_rounds; ++round) {
-        bool deep = false;
-        const std::size_t found = self_collide_round<Parallel>(out, x0, y0, z0, deep);
-        if (round == 0) sc_contacts_ = found;
-        total += found;
-        if (!deep) break; // another round only when a pair was pushed by more than half the thickness
+    const float* xa = snapshot ? sc_snap_x_.data() : start.x.data();
+    const float* ya = snapshot ? sc_snap_y_.data() : start.y.data();
+    const float* za = snapshot ? sc_snap_z_.data() : start.z.data();
+    // The largest move of any particle since then (per block, then the largest of those: exact in any order).
+    float* moved = sc_block_moved_.data();
+    for_blocks<Parallel>(n, [&](std::size_t begin, std::size_t end) {
+        float m = 0.0f;
+        for (std::size_t i = begin; i < end; ++i) {
+            const float dx = out.x[i] - xa[i], dy = out.y[i] - ya[i], dz = out.z[i] - za[i];
+            m = std::max(m, dx * dx + dy * dy + dz * dz);
+        }
+        moved[begin / sc_block] = m;
+    });
+    const float most2 = *std::max_element(sc_block_moved_.begin(), sc_block_moved_.end());
+    // Below a quarter of the thickness since the snapshot no two particles can have crossed a gap of half of it, and
+    // every pair closer than that was pushed to the thickness at the snapshot: nothing to do.
+    if (snapshot && most2 <= 0.0625f * h * h) return;
+    const float most = std::sqrt(most2);
+    // Sub-steps: the motion from there to here, cut into K equal parts that move no particle more than h / 2, so that
+    // no pair closes by more than h within one and a pair that crosses is still within h of the other side at its end,
+    // with its side from the part's start (a large implicit step moves the cloth several thicknesses). K = 1 unless a
+    // particle moved more than h / 2; at most self_collide_substeps (then a part may move more).
+    const int parts = most > 0.5f * h ? int(std::min(float(self_collide_substeps), std::ceil(most / (0.5f * h)))) : 1;
+    if (parts > 1) { // the motion's end kept; the parts start where the motion does
+        std::copy_n(out.x.data(), n, sc_end_x_.data());
+        std::copy_n(out.y.data(), n, sc_end_y_.data());
+        std::copy_n(out.z.data(), n, sc_end_z_.data());
+        std::copy_n(xa, n, out.x.data());
+        std::copy_n(ya, n, out.y.data());
+        std::copy_n(za, n, out.z.data());
     }
+    std::size_t total = 0;
+    for (int part = 1; part <= parts; ++part) {
+        const float *x0 = xa, *y0 = ya, *z0 = za;
+        if (parts > 1) {
+            // Each particle keeps what earlier parts pushed it by: x = (the motion's point at part k) + (x - its point
+            // at part k - 1); the last part's point is the step's end itself, so with no push the step ends unchanged.
+            const float s0 = float(part - 1) / float(parts), s1 = float(part) / float(parts);
+            const float *ex = sc_end_x_.data(), *ey = sc_end_y_.data(), *ez = sc_end_z_.data();
+            float *sx = sc_side_x_.data(), *sy = sc_side_y_.data(), *sz = sc_side_z_.data();
+            for_blocks<Parallel>(n, [&](std::size_t begin, std::size_t end) {
+                auto along = [&](const float* a, const float* e, std::size_t i, float t, bool last) {
+                    return last ? e[i] : a[i] + t * (e[i] - a[i]);
+                };
+                for (std::size_t i = begin; i < end; ++i) {
+                    sx[i] = out.x[i], sy[i] = out.y[i], sz[i] = out.z[i];
+                    out.x[i] = along(xa, ex, i, s1, part == parts) + (out.x[i] - along(xa, ex, i, s0, false));
+                    out.y[i] = along(ya, ey, i, s1, part == parts) + (out.y[i] - along(ya, ey, i, s0, false));
+                    out.z[i] = along(za, ez, i, s1, part == parts) + (out.z[i] - along(za, ez, i, s0, false));
+                }
+            });
+            x0 = sx, y0 = sy, z0 = sz;
+        }
+        for (int round = 0; round < self_collide_rounds; ++round) {
+            bool deep = false;
+            const std::size_t found = self_collide_round<Parallel>(out, x0, y0, z0, deep);
+            if (round == 0) sc_contacts_ = found;
+            total += found;
+            if (!deep) break; // another round only when a pair was pushed by more than half the thickness
+        }
+    }
+    sc_parts_ = std::size_t(parts);
     // A push may have moved a particle into a collider: the collide stage's particle pass has the last word.
     if (total > 0 && !params_.colliders.empty()) collide_stage<Parallel>(out, true, 0);
     std::copy_n(out.x.data(), n, sc_snap_x_.data());

@@ -239,6 +239,9 @@ class Simulation {
     /// Steps in which the self-collision stage ran since construction (it skips a step in which no particle has moved
     /// a quarter of the thickness since its last run).
     std::size_t self_collision_runs() const noexcept { return sc_runs_; }
+    /// Parts the stage's last run cut the motion since its previous run into (1 unless a particle moved more than half
+    /// the thickness: then each part moves none more than that, up to 32 parts; docs/self_collision.md).
+    std::size_t self_collision_parts() const noexcept { return sc_parts_; }
     /// For tests: when on, the self-collision stage tests every pair of the cloth (point-triangle and edge-edge, no
     /// patches, no culling): the reference its broad phase is checked against. O(n^2): small cloths only.
     void set_self_collision_reference(bool on) noexcept { sc_reference_ = on; }
@@ -375,6 +378,10 @@ class Simulation {
     // some particle has moved more than a quarter of the thickness from it, and takes each pair's side from it.
     std::vector<float> sc_snap_x_, sc_snap_y_, sc_snap_z_;
     std::vector<float> sc_block_moved_; ///< per block of particles: the largest squared move from the snapshot
+    // A run that cuts the motion into parts (a particle moved more than h / 2): the motion's end, and the positions at
+    // the start of the part (each pair's side).
+    std::vector<float> sc_end_x_, sc_end_y_, sc_end_z_, sc_side_x_, sc_side_y_, sc_side_z_;
+    std::size_t sc_parts_ = 0; ///< parts of the last run (self_collision_parts)
     std::size_t sc_snap_step_ = SIZE_MAX; ///< steps_done_ after the step the snapshot was taken in (SIZE_MAX: none)
     std::size_t sc_runs_ = 0;             ///< steps in which the stage ran (self_collision_runs)
     template <bool Parallel> void seam_forces_stage();
