@@ -231,7 +231,8 @@ int run_command(const RunOptions& o) {
     j["strain_every"] = sp.strain_limit.every;
     j["colliders"] = sp.colliders.size();
     j["self_collision"] = {{"thickness", sp.self_collision.thickness}, {"friction", sp.self_collision.friction},
-                           {"contacts", sim.self_contacts()}, {"runs", sim.self_collision_runs()}};
+                           {"contacts", sim.self_contacts()}, {"runs", sim.self_collision_runs()},
+                           {"parts", sim.self_collision_parts()}};
     j["seam_springs"] = sim.cloth().seams.a.size();
     j["seam_colours"] = sim.cloth().seams.groups.colour_count;
     if (exporter) j["obj_frames"] = frames_written;
