@@ -602,7 +602,7 @@ TEST(SelfCollisionBroadPhase, SameBitsAsTestingEveryPair) {
         sim->step(static_cast<std::size_t>(0.02 / dt));
         const std::array<float, 3> p0{sim->x()[hem], sim->y()[hem], sim->z()[hem]};
         sim->grab(hem, p0);
-        for (int k = 1; k <= checks / 2; ++k) {
+        for (int k = 1; k <= 4; ++k) { // under ASan too: fewer pushes leave the panels apart (no contact)
             sim->move_grab({p0[0], p0[1] - 0.01f * float(k), p0[2] - 0.03f * float(k)});
             sim->step(static_cast<std::size_t>(0.01 / dt));
             if (sim == &fast) contacts += sim->self_contacts(), most_parts = std::max(most_parts, sim->self_collision_parts());
