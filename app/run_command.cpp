@@ -232,7 +232,7 @@ int run_command(const RunOptions& o) {
     j["colliders"] = sp.colliders.size();
     j["self_collision"] = {{"thickness", sp.self_collision.thickness}, {"friction", sp.self_collision.friction},
                            {"contacts", sim.self_contacts()}, {"runs", sim.self_collision_runs()},
-                           {"parts", sim.self_collision_parts()}};
+                           {"parts", sim.self_collision_parts()}, {"resolves", sim.self_collision_resolves()}};
     j["seam_springs"] = sim.cloth().seams.a.size();
     j["seam_colours"] = sim.cloth().seams.groups.colour_count;
     if (exporter) j["obj_frames"] = frames_written;

@@ -403,8 +403,17 @@ template <bool Parallel> void Simulation::implicit_step() {
                                             params_.implicit, h, params_.air_drag);
     implicit_stats_.levels = multilevel ? static_cast<std::uint32_t>(1 + is.coarse.size()) : 1;
 
-    // 4. Velocities (friction acted inside the sweeps: vbd.cpp); a contact of the last sweep keeps no inward normal
-    // velocity (an inelastic contact). Finite check per block.
+    implicit_velocities<Parallel>();
+}
+
+/// Step 4: v^{n+1} = (x - x^n) / h (friction acted inside the sweeps: vbd.cpp); a collider contact of the last sweep
+/// keeps no inward normal velocity (an inelastic contact). Finite check per block.
+template <bool Parallel> void Simulation::implicit_velocities() {
+    const std::size_t n = cloth_.particle_count;
+    const ImplicitSolver& is = *implicit_;
+    const StateBuffer& a = buffers_[current_];
+    StateBuffer& b = buffers_[1 - current_];
+    const float inv_h = 1.0f / params_.dt;
     const bool contact = !params_.colliders.empty();
     const float *cnx = is.fine.contact_nx(), *cny = is.fine.contact_ny(), *cnz = is.fine.contact_nz();
     for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
@@ -429,7 +438,29 @@ template <bool Parallel> void Simulation::implicit_step() {
     });
 }
 
+/// The contact re-solve (docs/self_collision.md, "Inside the implicit solve"). Self-collision pushed particles of the
+/// step's result apart; on their own those pushes strain the cloth around each contact, which the next step's sweeps
+/// then pull back into the contact (the fight measured on the crumpled pile: strain 1.0). Here the step's objective is
+/// minimised again from the pushed positions, each pushed particle held on its side of its contact plane (active-set
+/// style: the contacts the pass found become constraints), so the cloth around a contact follows it.
+template <bool Parallel> void Simulation::implicit_contact_resolve() {
+    ImplicitSolver& is = *implicit_;
+    const StateBuffer& a = buffers_[current_];
+    StateBuffer& b = buffers_[1 - current_];
+    vbd::LevelState st{a.x.data(), a.y.data(), a.z.data(), b.x.data(), b.y.data(), b.z.data(),
+                       cloth_.inv_mass.data(), params_.colliders};
+    st.plane_nx = sc_plane_x_.data();
+    st.plane_ny = sc_plane_y_.data();
+    st.plane_nz = sc_plane_z_.data();
+    st.plane_c = sc_plane_c_.data();
+    is.fine.run<Parallel>(st, params_.implicit, params_.dt, params_.air_drag);
+    implicit_velocities<Parallel>();
+    ++sc_resolves_;
+}
+
 template void Simulation::implicit_step<true>();
 template void Simulation::implicit_step<false>();
+template void Simulation::implicit_contact_resolve<true>();
+template void Simulation::implicit_contact_resolve<false>();
 
 } // namespace drape

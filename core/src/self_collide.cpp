@@ -140,7 +140,8 @@ void Simulation::cook_self_collision() {
         sc_hits_.assign(n, 0);
         sc_block_shortest_.assign((edges + sc_block - 1) / sc_block, 0.0f);
         for (std::vector<float>* a : {&sc_snap_x_, &sc_snap_y_, &sc_snap_z_, &sc_end_x_, &sc_end_y_, &sc_end_z_,
-                                      &sc_side_x_, &sc_side_y_, &sc_side_z_})
+                                      &sc_side_x_, &sc_side_y_, &sc_side_z_, &sc_push_x_, &sc_push_y_,
+                                      &sc_push_z_, &sc_plane_x_, &sc_plane_y_, &sc_plane_z_, &sc_plane_c_})
             a->assign(n, 0.0f);
         sc_block_moved_.assign((n + sc_block - 1) / sc_block, 0.0f);
         sc_snap_step_ = SIZE_MAX;
@@ -159,14 +160,15 @@ void Simulation::cook_self_collision() {
     sc_patch_calm_.assign(patches, 0);
 }
 
-template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out) {
+template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out, bool again) {
     if (sc_acc_.empty()) cook_self_collision(); // not expected: construction and set_params cook
+    sc_pushed_ = false;
     if (sc_acc_.empty()) return;                // no triangles
     const std::size_t n = cloth_.particle_count;
     const float h = params_.self_collision.thickness;
     // steps_done_ has not been advanced for this step yet: the snapshot is of this trajectory when it was taken at or
     // before the end of the previous step (the health monitor's restore moves steps_done_ back before it).
-    const bool snapshot = sc_snap_step_ != SIZE_MAX && sc_snap_step_ <= steps_done_;
+    const bool snapshot = sc_snap_step_ != SIZE_MAX && (again || sc_snap_step_ <= steps_done_);
     // Where the motion this run covers starts (and each pair's side comes from): the snapshot, or (none yet) the
     // start of this step.
     const StateBuffer& start = buffers_[current_];
@@ -188,6 +190,11 @@ template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out) {
     // every pair closer than that was pushed to the thickness at the snapshot: nothing to do.
     if (snapshot && most2 <= 0.0625f * h * h) return;
     const float most = std::sqrt(most2);
+    if (!again) for_blocks<Parallel>(n, [&](std::size_t begin, std::size_t end) {
+        std::fill(sc_push_x_.data() + begin, sc_push_x_.data() + end, 0.0f);
+        std::fill(sc_push_y_.data() + begin, sc_push_y_.data() + end, 0.0f);
+        std::fill(sc_push_z_.data() + begin, sc_push_z_.data() + end, 0.0f);
+    });
     // Sub-steps: the motion from there to here, cut into K equal parts that move no particle more than h / 2, so that
     // no pair closes by more than h within one and a pair that crosses is still within h of the other side at its end,
     // with its side from the part's start (a large implicit step moves the cloth several thicknesses). K = 1 unless a
@@ -232,13 +239,31 @@ template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out) {
         }
     }
     sc_parts_ = std::size_t(parts);
+    // For the implicit solver's contact re-solve (after a step's first run): each pushed particle's contact plane, the
+    // unit normal along its total push this step, through where the run left it.
+    sc_pushed_ = total > 0 && !again && params_.solver == Solver::implicit;
+    if (sc_pushed_)
+        for_blocks<Parallel>(n, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t i = begin; i < end; ++i) {
+                const float px = sc_push_x_[i], py = sc_push_y_[i], pz = sc_push_z_[i];
+                const float l2 = px * px + py * py + pz * pz;
+                if (!(l2 > 1e-4f * h * h)) { // pushed by less than h / 100 (or in opposite ways): no plane
+                    sc_plane_x_[i] = sc_plane_y_[i] = sc_plane_z_[i] = sc_plane_c_[i] = 0.0f;
+                    continue;
+                }
+                const float inv = 1.0f / std::sqrt(l2);
+                const float nx = px * inv, ny = py * inv, nz = pz * inv;
+                sc_plane_x_[i] = nx, sc_plane_y_[i] = ny, sc_plane_z_[i] = nz;
+                sc_plane_c_[i] = nx * out.x[i] + ny * out.y[i] + nz * out.z[i];
+            }
+        });
     // A push may have moved a particle into a collider: the collide stage's particle pass has the last word.
     if (total > 0 && !params_.colliders.empty()) collide_stage<Parallel>(out, true, 0);
     std::copy_n(out.x.data(), n, sc_snap_x_.data());
     std::copy_n(out.y.data(), n, sc_snap_y_.data());
     std::copy_n(out.z.data(), n, sc_snap_z_.data());
     sc_snap_step_ = steps_done_ + 1;
-    ++sc_runs_;
+    if (!again) ++sc_runs_;
 }
 
 template <bool Parallel>
@@ -654,9 +679,13 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
             if (hits[i] == 0) continue;
             const double inv = 1.0 / (fixed_scale * double(hits[i]));
             std::int64_t* a = acc + 6 * i;
-            x[i] += float(double(a[0]) * inv);
-            y[i] += float(double(a[1]) * inv);
-            z[i] += float(double(a[2]) * inv);
+            const float px = float(double(a[0]) * inv), py = float(double(a[1]) * inv), pz = float(double(a[2]) * inv);
+            x[i] += px;
+            y[i] += py;
+            z[i] += pz;
+            sc_push_x_[i] += px;
+            sc_push_y_[i] += py;
+            sc_push_z_[i] += pz;
             const float dvx = float(double(a[3]) * inv), dvy = float(double(a[4]) * inv), dvz = float(double(a[5]) * inv);
             if (verlet) {
                 out.u[i] += dvx * dt;
@@ -674,7 +703,7 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
     return found;
 }
 
-template void Simulation::self_collide_stage<true>(StateBuffer&);
-template void Simulation::self_collide_stage<false>(StateBuffer&);
+template void Simulation::self_collide_stage<true>(StateBuffer&, bool);
+template void Simulation::self_collide_stage<false>(StateBuffer&, bool);
 
 } // namespace drape

@@ -223,7 +223,17 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
         StateBuffer& out = buffers_[1 - current_];
         const bool collide = !params_.colliders.empty();
         if (!strain_limit_stage<Parallel>(out, collide) && collide) collide_stage<Parallel>(out);
-        if (params_.self_collision.thickness > 0.0f) self_collide_stage<Parallel>(out);
+        if (params_.self_collision.thickness > 0.0f) {
+            self_collide_stage<Parallel>(out);
+            // Implicit: the contacts the pass pushed apart become planes the step is solved again with, then the pass
+            // checks the result (implicit_contact_resolve).
+            if (implicit && sc_pushed_) {
+                implicit_contact_resolve<Parallel>();
+                check_blocks(steps_done_);
+                if (!strain_limit_stage<Parallel>(out, collide) && collide) collide_stage<Parallel>(out);
+                self_collide_stage<Parallel>(out, true);
+            }
+        }
         current_ = 1 - current_;
         ++steps_done_;
         if (steps_done_ % check_every == 0) check_health<Parallel>();

@@ -351,7 +351,8 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     }
     // Chebyshev's extrapolation and contact disagree (it throws points a collider holds back into the air: a cloth
     // resting on the ground bounced 3 cm, measured), so with colliders the sweeps run plain.
-    const bool chebyshev = ip.chebyshev_rho > 0.0f && st.colliders.empty();
+    const bool planes = st.plane_c != nullptr;
+    const bool chebyshev = ip.chebyshev_rho > 0.0f && st.colliders.empty() && !planes;
     const float rho2 = ip.chebyshev_rho * ip.chebyshev_rho;
     const std::size_t blocks = (count + block_particles - 1) / block_particles;
     float omega = 1.0f;
@@ -362,10 +363,20 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     }
     // Contact, vertex by vertex right after its local step (its neighbours then never see it inside a collider):
     // out of every collider from the side the step came from; the normal of the last contact is kept for friction.
-    const bool contact = !st.colliders.empty();
+    const bool colliders = !st.colliders.empty(), contact = colliders || planes;
     // Coulomb friction in the same place: the step's tangential displacement loses up to mu times the normal
     // displacement the contact holds the point away from its inertial prediction (stick when it is smaller).
     auto keep_out = [&](std::size_t i, float p[3]) {
+        if (planes) { // self-contact: not closer to the partner than the plane the contact left the vertex on
+            const float nx = st.plane_nx[i], ny = st.plane_ny[i], nz = st.plane_nz[i];
+            const float gap = st.plane_c[i] - (nx * p[0] + ny * p[1] + nz * p[2]);
+            if (gap > 0.0f) {
+                p[0] += gap * nx;
+                p[1] += gap * ny;
+                p[2] += gap * nz;
+            }
+        }
+        if (!colliders) return;
         const float p0[3] = {st.x0[i], st.y0[i], st.z0[i]};
         float normal[3] = {0.0f, 0.0f, 0.0f};
         const float mu = contact_project(st.colliders, p0, p, normal);

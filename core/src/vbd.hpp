@@ -32,6 +32,13 @@ struct LevelState {
     float* z;
     const float* inv_mass; ///< 0 = fixed at x^n
     std::span<const Collider> colliders; ///< kept out of during the sweeps (contact_project)
+    /// Optional per-vertex contact planes (self-collision's, docs/self_collision.md "Inside the implicit solve"):
+    /// vertex i with a nonzero unit normal n_i stays where n_i . x >= plane_c[i] (projected after its local step,
+    /// before the colliders). Null: none.
+    const float* plane_nx = nullptr;
+    const float* plane_ny = nullptr;
+    const float* plane_nz = nullptr;
+    const float* plane_c = nullptr;
 };
 
 /// Contact inside the sweeps: if p is inside a collider (its inflated solid, colliders.hpp), moves it onto the tangent

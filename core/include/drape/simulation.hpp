@@ -242,6 +242,9 @@ class Simulation {
     /// Parts the stage's last run cut the motion since its previous run into (1 unless a particle moved more than half
     /// the thickness: then each part moves none more than that, up to 32 parts; docs/self_collision.md).
     std::size_t self_collision_parts() const noexcept { return sc_parts_; }
+    /// Implicit steps in which self-collision pushed particles apart and the step was solved again with them held on
+    /// their contact planes, since construction (docs/self_collision.md, "Inside the implicit solve").
+    std::size_t self_collision_resolves() const noexcept { return sc_resolves_; }
     /// For tests: when on, the self-collision stage tests every pair of the cloth (point-triangle and edge-edge, no
     /// patches, no culling): the reference its broad phase is checked against. O(n^2): small cloths only.
     void set_self_collision_reference(bool on) noexcept { sc_reference_ = on; }
@@ -273,6 +276,11 @@ class Simulation {
     /// Cooks the implicit solver's graph and scratch (when first chosen).
     void cook_implicit();
     template <bool Parallel> void multilevel_guess();
+    /// The implicit step's contact re-solve: the step's sweeps again from where self-collision left the cloth, each
+    /// pushed particle held on its side of its contact plane, then the velocities (implicit_step.cpp).
+    template <bool Parallel> void implicit_contact_resolve();
+    /// v = (x - x^n) / h into buffer B, without the inward normal velocity of a collider contact; finite check.
+    template <bool Parallel> void implicit_velocities();
     std::unique_ptr<ImplicitSolver> implicit_; ///< cooked when the implicit solver is first chosen (implicit_solver.hpp)
     ImplicitStats implicit_stats_;
     kernels::StepContext make_context(std::size_t step_index);
@@ -354,7 +362,9 @@ class Simulation {
     // of the patches (counting sort into buckets: sizes fixed at cooking, at most 8 cells per patch), and per particle
     // fixed-point accumulators of the pushes (integer sums are exact, so the result does not depend on the order in
     // which threads add).
-    template <bool Parallel> void self_collide_stage(StateBuffer& out);
+    /// `again`: this step's second run (after the implicit contact re-solve): the motion it covers starts at the first
+    /// run's end (its snapshot), where the pairs were pushed apart.
+    template <bool Parallel> void self_collide_stage(StateBuffer& out, bool again = false);
     template <bool Parallel>
     std::size_t self_collide_round(StateBuffer& out, const float* x0, const float* y0, const float* z0, bool& deep);
     void cook_self_collision();
@@ -382,8 +392,13 @@ class Simulation {
     // the start of the part (each pair's side).
     std::vector<float> sc_end_x_, sc_end_y_, sc_end_z_, sc_side_x_, sc_side_y_, sc_side_z_;
     std::size_t sc_parts_ = 0; ///< parts of the last run (self_collision_parts)
+    // Per particle, the sum of this step's pushes; after its first run (implicit solver) a contact plane from it: unit
+    // normal along it, offset n . x at the run's end, for the contact re-solve (implicit_step.cpp). Normal 0 0 0: none.
+    std::vector<float> sc_push_x_, sc_push_y_, sc_push_z_, sc_plane_x_, sc_plane_y_, sc_plane_z_, sc_plane_c_;
+    bool sc_pushed_ = false; ///< the last run was an implicit step's first and pushed some particle (planes set)
     std::size_t sc_snap_step_ = SIZE_MAX; ///< steps_done_ after the step the snapshot was taken in (SIZE_MAX: none)
     std::size_t sc_runs_ = 0;             ///< steps in which the stage ran (self_collision_runs)
+    std::size_t sc_resolves_ = 0;         ///< implicit contact re-solves (self_collision_resolves)
     template <bool Parallel> void seam_forces_stage();
     template <bool Parallel> void aero_forces_stage();
     void cook_aero();
