@@ -65,42 +65,29 @@ SelfCollisionPatches cook_self_collision_patches(std::span<const std::uint32_t> 
         out.points.insert(out.points.end(), o.begin(), o.end());
         out.point_start.push_back(std::uint32_t(out.points.size()));
     }
-    // Edges: owned by the patch of the lowest triangle holding both ends.
+    // Edges: owned by the patch of the lowest triangle holding both ends. An edge that only one triangle holds is on
+    // the cloth's border, and so is that triangle's patch (as are the patches of particles in no triangle).
     std::vector<std::vector<std::uint32_t>> edges_of(owned.size());
+    out.on_border.assign(owned.size(), 0);
+    for (std::size_t p = patches; p < owned.size(); ++p) out.on_border[p] = 1;
     for (std::uint32_t e = 0; e < edge_count; ++e) {
         const std::uint32_t a = edges[2 * e], b = edges[2 * e + 1];
+        std::uint32_t first = none, holding = 0;
         for (std::uint32_t j = vertex_tri_offsets[a]; j < vertex_tri_offsets[a + 1]; ++j) {
             const std::uint32_t t = vertex_tris[j];
             if (triangles[3 * t] == b || triangles[3 * t + 1] == b || triangles[3 * t + 2] == b) {
-                edges_of[patch_of[t]].push_back(e);
-                break;
+                if (first == none) first = t;
+                ++holding;
             }
         }
+        if (first == none) continue;
+        edges_of[patch_of[first]].push_back(e);
+        if (holding == 1) out.on_border[patch_of[first]] = 1;
     }
     out.edge_start.push_back(0);
     for (const auto& o : edges_of) {
         out.edges.insert(out.edges.end(), o.begin(), o.end());
         out.edge_start.push_back(std::uint32_t(out.edges.size()));
-    }
-    // Patches at the cloth's border: a triangle with an edge no other triangle has.
-    out.on_border.assign(owned.size(), 0);
-    {
-        std::vector<std::uint64_t> keys;
-        keys.reserve(3 * tris);
-        for (std::size_t t = 0; t < tris; ++t)
-            for (int k = 0; k < 3; ++k) {
-                std::uint32_t a = triangles[3 * t + k], b = triangles[3 * t + (k + 1) % 3];
-                if (a > b) std::swap(a, b);
-                keys.push_back(std::uint64_t(a) << 32 | b);
-            }
-        std::vector<std::uint64_t> sorted = keys;
-        std::sort(sorted.begin(), sorted.end());
-        for (std::size_t t = 0; t < tris; ++t)
-            for (int k = 0; k < 3; ++k) {
-                const auto range = std::equal_range(sorted.begin(), sorted.end(), keys[3 * t + k]);
-                if (range.second - range.first == 1) out.on_border[patch_of[t]] = 1;
-            }
-        for (std::size_t p = patches; p < owned.size(); ++p) out.on_border[p] = 1; // particles in no triangle
     }
     // Touching patches: two patches with triangles at one particle.
     std::vector<std::uint64_t> pairs;
