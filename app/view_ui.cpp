@@ -317,12 +317,14 @@ void Viewer::ui_physics() {
                                1e3f * self_collision_max_thickness, "%.1f mm", log_flags, self_mm);
     ImGui::PopItemWidth();
     help_marker("Cloth against cloth (docs/self_collision.md): points and edges closer than this thickness are pushed "
-                "apart, once something moved a quarter of it. Costly (tens of times an explicit substep); the "
-                "implicit solver's large steps can still pass through.");
+                "apart, once something moved a quarter of it. Costly (tens of times an explicit substep). With the "
+                "implicit solver a step that pushed is solved again with the contacts held (re-solves); its large "
+                "steps can still pass through.");
     if (self_changed) s.set_self_collision(self_on ? 1e-3f * self_mm : 0.0f);
     if (self_on)
-        ImGui::TextDisabled("%s contacts at its last run, ran in %s steps", grouped(s.sim().self_contacts()).c_str(),
-                            grouped(s.sim().self_collision_runs()).c_str());
+        ImGui::TextDisabled("%s contacts at its last run, ran in %s steps%s%s", grouped(s.sim().self_contacts()).c_str(),
+                            grouped(s.sim().self_collision_runs()).c_str(), implicit ? ", re-solves " : "",
+                            implicit ? grouped(s.sim().self_collision_resolves()).c_str() : "");
     float dt = 0.0f;
     const float bound = static_cast<float>(s.dt_bound());
     if (implicit) {
