@@ -350,7 +350,7 @@ PileRun run_crumpled_pile(float thickness, double seconds, int checks) {
 
 // 13 s in Release: Release only (scripts/test.sh); under ASan the folded pile above runs the same code.
 // Not a test: prints the crumpled pile's intersecting pairs / largest structural strain every 0.1 s for 1 s with the
-// implicit solver (docs/self_collision.md).
+// implicit solver (docs/self_collision.md); DRAPE_PILE_DT sets the step (default the scene's 1/30 s).
 TEST(DISABLED_SelfCollisionImplicitPile, IntersectionsOverTime) {
     for (bool single : {false, true})
         for (float h : {0.0f, 0.004f}) {
@@ -360,6 +360,7 @@ TEST(DISABLED_SelfCollisionImplicitPile, IntersectionsOverTime) {
             spec.physics.integrator = Integrator::symplectic_euler;
             spec.physics.implicit.multilevel = !single;
             BuiltScene b = build_scene(spec);
+            if (const char* dt = std::getenv("DRAPE_PILE_DT")) b.params.dt = float(std::atof(dt)); // default: 1/30 s
             Simulation sim(std::move(b.cloth), b.initial, b.params);
             const auto t0 = std::chrono::steady_clock::now();
             std::printf("%s h %.3f dt %.4f:", single ? "single" : "multi", h, sim.params().dt);
