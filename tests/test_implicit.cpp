@@ -367,11 +367,15 @@ TEST(Implicit, ValidatesItsParameters) {
 // (vbd_batch.hpp: a colour's vertices simd::width at a time) and, for a grid cloth, on its colour sub-grids
 // (vbd_grid.hpp: contiguous loads). Cases: a grid with bending and damping in contact with a sphere, the same grid in
 // the seeds' springs model (bend springs two apart, no bending rows), a 6 x 6 grid, and a sewn T-shirt (hinge
-// bending, seams, the body's colliders: no grid).
+// bending, seams, the body's colliders: no grid); the grid again with contact planes (self-collision's re-solve).
 TEST(Implicit, SimdSweepsMatchTheScalarReferenceBitForBit) {
-    auto compare = [](const Cloth& cloth, const InitialState& s, std::span<const Collider> colliders, bool grid_layout) {
+    // planes: every fifth vertex held at or above its start height (self-collision's contact planes, LevelState).
+    auto compare = [](const Cloth& cloth, const InitialState& s, std::span<const Collider> colliders, bool grid_layout,
+                      bool planes = false) {
         const std::size_t n = cloth.particle_count;
         std::vector<float> out[3][3];
+        std::vector<float> pn_x(n, 0.0f), pn_y(n, 0.0f), pn_z(n, 0.0f), pc(n, 0.0f);
+        for (std::size_t i = 0; i < n; i += 5) pn_y[i] = 1.0f, pc[i] = s.y[i];
         for (int mode = 0; mode < 3; ++mode) { // scalar, slices, grid layout (where the cloth has one)
             vbd::Solver solver;
             solver.cook(cloth);
@@ -390,9 +394,20 @@ TEST(Implicit, SimdSweepsMatchTheScalarReferenceBitForBit) {
             ImplicitParams ip;
             ip.iterations = 6;
             ip.chebyshev_rho = 0.0f;
-            solver.run<false>({s.x.data(), s.y.data(), s.z.data(), out[mode][0].data(), out[mode][1].data(),
-                               out[mode][2].data(), cloth.inv_mass.data(), colliders},
-                              ip, h, 0.2f);
+            vbd::LevelState st{s.x.data(),           s.y.data(),           s.z.data(),          out[mode][0].data(),
+                               out[mode][1].data(), out[mode][2].data(), cloth.inv_mass.data(), colliders};
+            if (planes) st.plane_nx = pn_x.data(), st.plane_ny = pn_y.data(), st.plane_nz = pn_z.data(), st.plane_c = pc.data();
+            solver.run<false>(st, ip, h, 0.2f);
+        }
+        if (planes) { // the planes held: no planed vertex below its start, some of them on it
+            std::size_t held = 0, below = 0;
+            for (std::size_t i = 0; i < n; i += 5) {
+                if (cloth.inv_mass[i] == 0.0f) continue;
+                held += out[0][1][i] == s.y[i];
+                below += out[0][1][i] < s.y[i];
+            }
+            EXPECT_EQ(below, 0u);
+            EXPECT_GT(held, n / 20);
         }
         for (int mode = 1; mode < 3; ++mode) {
             std::size_t differ = 0;
@@ -417,6 +432,8 @@ TEST(Implicit, SimdSweepsMatchTheScalarReferenceBitForBit) {
     shake(grid.initial);
     compare(grid.cloth, grid.initial, sphere, true);
     compare(grid.cloth, grid.initial, {}, true);
+    compare(grid.cloth, grid.initial, {}, true, true);
+    compare(grid.cloth, grid.initial, sphere, true, true);
     HangParams springs;
     springs.n = 29;
     springs.bend_ratio = 0.1f;
