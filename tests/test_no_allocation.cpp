@@ -160,8 +160,9 @@ TEST(NoAllocation, SelfCollisionStepDoesNotAllocate) {
             counting = false;
             EXPECT_EQ(allocations.load(), 0u);
             EXPECT_GT(sim.self_contacts(), 0u) << "the stage ran with contacts";
-            if (solver == Solver::implicit)
+            if (solver == Solver::implicit) {
                 EXPECT_GT(sim.self_collision_resolves(), resolves) << "the contact re-solve ran while counted";
+            }
         });
     }
 }

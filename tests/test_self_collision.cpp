@@ -460,7 +460,9 @@ TEST(SelfCollision, BitwiseSameForEveryThreadCount) {
             });
         }
         EXPECT_GT(contacts, 0u);
-        if (solver == Solver::implicit) EXPECT_GT(resolves, 0u) << "the contact re-solve never ran";
+        if (solver == Solver::implicit) {
+            EXPECT_GT(resolves, 0u) << "the contact re-solve never ran";
+        }
         EXPECT_EQ(sums[0], sums[1]);
         EXPECT_EQ(sums[1], sums[2]);
     }
