@@ -449,9 +449,9 @@ template <bool Parallel> void Simulation::implicit_contact_resolve() {
     StateBuffer& b = buffers_[1 - current_];
     vbd::LevelState st{a.x.data(), a.y.data(), a.z.data(), b.x.data(), b.y.data(), b.z.data(),
                        cloth_.inv_mass.data(), params_.colliders};
-    st.plane_nx = sc_plane_x_.data();
-    st.plane_ny = sc_plane_y_.data();
-    st.plane_nz = sc_plane_z_.data();
+    st.plane_nx = sc_push_x_.data(); // normalised into the planes' normals at the end of the stage's first run
+    st.plane_ny = sc_push_y_.data();
+    st.plane_nz = sc_push_z_.data();
     st.plane_c = sc_plane_c_.data();
     is.fine.run<Parallel>(st, params_.implicit, params_.dt, params_.air_drag);
     implicit_velocities<Parallel>();

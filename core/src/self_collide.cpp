@@ -141,7 +141,7 @@ void Simulation::cook_self_collision() {
         sc_block_shortest_.assign((edges + sc_block - 1) / sc_block, 0.0f);
         for (std::vector<float>* a : {&sc_snap_x_, &sc_snap_y_, &sc_snap_z_, &sc_end_x_, &sc_end_y_, &sc_end_z_,
                                       &sc_side_x_, &sc_side_y_, &sc_side_z_, &sc_push_x_, &sc_push_y_,
-                                      &sc_push_z_, &sc_plane_x_, &sc_plane_y_, &sc_plane_z_, &sc_plane_c_})
+                                      &sc_push_z_, &sc_plane_c_})
             a->assign(n, 0.0f);
         sc_block_moved_.assign((n + sc_block - 1) / sc_block, 0.0f);
         sc_snap_step_ = SIZE_MAX;
@@ -190,7 +190,10 @@ template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out, b
     // every pair closer than that was pushed to the thickness at the snapshot: nothing to do.
     if (snapshot && most2 <= 0.0625f * h * h) return;
     const float most = std::sqrt(most2);
-    if (!again) for_blocks<Parallel>(n, [&](std::size_t begin, std::size_t end) {
+    // The implicit contact re-solve's planes come from the pushes of a step's first run: only then are they summed.
+    const bool track = params_.solver == Solver::implicit && !again;
+    sc_track_pushes_ = track;
+    if (track) for_blocks<Parallel>(n, [&](std::size_t begin, std::size_t end) {
         std::fill(sc_push_x_.data() + begin, sc_push_x_.data() + end, 0.0f);
         std::fill(sc_push_y_.data() + begin, sc_push_y_.data() + end, 0.0f);
         std::fill(sc_push_z_.data() + begin, sc_push_z_.data() + end, 0.0f);
@@ -240,20 +243,20 @@ template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out, b
     }
     sc_parts_ = std::size_t(parts);
     // For the implicit solver's contact re-solve (after a step's first run): each pushed particle's contact plane, the
-    // unit normal along its total push this step, through where the run left it.
-    sc_pushed_ = total > 0 && !again && params_.solver == Solver::implicit;
+    // unit normal along its total push in this run (normalised in place), through where the run left it.
+    sc_pushed_ = total > 0 && track;
     if (sc_pushed_)
         for_blocks<Parallel>(n, [&](std::size_t begin, std::size_t end) {
             for (std::size_t i = begin; i < end; ++i) {
                 const float px = sc_push_x_[i], py = sc_push_y_[i], pz = sc_push_z_[i];
                 const float l2 = px * px + py * py + pz * pz;
                 if (!(l2 > 1e-4f * h * h)) { // pushed by less than h / 100 (or in opposite ways): no plane
-                    sc_plane_x_[i] = sc_plane_y_[i] = sc_plane_z_[i] = sc_plane_c_[i] = 0.0f;
+                    sc_push_x_[i] = sc_push_y_[i] = sc_push_z_[i] = sc_plane_c_[i] = 0.0f;
                     continue;
                 }
                 const float inv = 1.0f / std::sqrt(l2);
                 const float nx = px * inv, ny = py * inv, nz = pz * inv;
-                sc_plane_x_[i] = nx, sc_plane_y_[i] = ny, sc_plane_z_[i] = nz;
+                sc_push_x_[i] = nx, sc_push_y_[i] = ny, sc_push_z_[i] = nz;
                 sc_plane_c_[i] = nx * out.x[i] + ny * out.y[i] + nz * out.z[i];
             }
         });
@@ -683,9 +686,11 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
             x[i] += px;
             y[i] += py;
             z[i] += pz;
-            sc_push_x_[i] += px;
-            sc_push_y_[i] += py;
-            sc_push_z_[i] += pz;
+            if (sc_track_pushes_) {
+                sc_push_x_[i] += px;
+                sc_push_y_[i] += py;
+                sc_push_z_[i] += pz;
+            }
             const float dvx = float(double(a[3]) * inv), dvy = float(double(a[4]) * inv), dvz = float(double(a[5]) * inv);
             if (verlet) {
                 out.u[i] += dvx * dt;

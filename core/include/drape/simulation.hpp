@@ -392,9 +392,11 @@ class Simulation {
     // the start of the part (each pair's side).
     std::vector<float> sc_end_x_, sc_end_y_, sc_end_z_, sc_side_x_, sc_side_y_, sc_side_z_;
     std::size_t sc_parts_ = 0; ///< parts of the last run (self_collision_parts)
-    // Per particle, the sum of this step's pushes; after its first run (implicit solver) a contact plane from it: unit
-    // normal along it, offset n . x at the run's end, for the contact re-solve (implicit_step.cpp). Normal 0 0 0: none.
-    std::vector<float> sc_push_x_, sc_push_y_, sc_push_z_, sc_plane_x_, sc_plane_y_, sc_plane_z_, sc_plane_c_;
+    // Implicit solver, per particle: the sum of the pushes of a step's first run, then (at its end, normalised in place)
+    // the unit normal of its contact plane, with the offset n . x where the run left it, for the contact re-solve
+    // (implicit_step.cpp). Normal 0 0 0: none.
+    std::vector<float> sc_push_x_, sc_push_y_, sc_push_z_, sc_plane_c_;
+    bool sc_track_pushes_ = false; ///< this run sums its pushes (an implicit step's first run)
     bool sc_pushed_ = false; ///< the last run was an implicit step's first and pushed some particle (planes set)
     std::size_t sc_snap_step_ = SIZE_MAX; ///< steps_done_ after the step the snapshot was taken in (SIZE_MAX: none)
     std::size_t sc_runs_ = 0;             ///< steps in which the stage ran (self_collision_runs)
