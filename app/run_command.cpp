@@ -111,6 +111,7 @@ int run_command(const RunOptions& o) {
     if (o.strain_passes) spec.physics.strain_limit.passes = *o.strain_passes;
     if (o.strain_every) spec.physics.strain_limit.every = *o.strain_every;
     if (o.self_collision) spec.physics.self_collision.thickness = *o.self_collision;
+    if (o.self_collision_substeps) spec.physics.self_collision.substeps = *o.self_collision_substeps;
     spec.physics.kernel = o.kernel == "grid" ? KernelPath::grid : o.kernel == "csr" ? KernelPath::csr : KernelPath::automatic;
     spec.physics.fused = !o.staged;
     if (o.dt) spec.dt = static_cast<float>(*o.dt);
@@ -232,7 +233,9 @@ int run_command(const RunOptions& o) {
     j["colliders"] = sp.colliders.size();
     j["self_collision"] = {{"thickness", sp.self_collision.thickness}, {"friction", sp.self_collision.friction},
                            {"contacts", sim.self_contacts()}, {"runs", sim.self_collision_runs()},
-                           {"parts", sim.self_collision_parts()}, {"resolves", sim.self_collision_resolves()}};
+                           {"parts", sim.self_collision_parts()}, {"resolves", sim.self_collision_resolves()},
+                           {"substeps", sp.self_collision.substeps},
+                           {"substepped", sim.self_collision_substepped()}};
     j["seam_springs"] = sim.cloth().seams.a.size();
     j["seam_colours"] = sim.cloth().seams.groups.colour_count;
     if (exporter) j["obj_frames"] = frames_written;

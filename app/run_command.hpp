@@ -35,6 +35,7 @@ struct RunOptions {
     std::optional<std::uint32_t> strain_passes;
     std::optional<std::uint32_t> strain_every;
     std::optional<float> self_collision; ///< thickness, m (0 = off)
+    std::optional<std::uint32_t> self_collision_substeps; ///< implicit sub-steps of a step in contact (1 = none)
     std::optional<std::string> export_obj; ///< directory for OBJ frames
     std::uint32_t export_every = 100;      ///< substeps between exported frames
     bool json = false;

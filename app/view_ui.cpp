@@ -318,12 +318,15 @@ void Viewer::ui_physics() {
     ImGui::PopItemWidth();
     help_marker("Cloth against cloth (docs/self_collision.md): points and edges closer than this thickness are pushed "
                 "apart, once something moved a quarter of it. Costly (tens of times an explicit substep). With the "
-                "implicit solver a step that pushed is solved again with the contacts held (re-solves); its large "
-                "steps can still pass through.");
+                "implicit solver a step in which cloth touched cloth is solved again as 4 sub-steps, and so are the "
+                "steps of the next second (sub-stepped); a sub-step that pushed is solved again with the contacts "
+                "held (re-solves).");
     if (self_changed) s.set_self_collision(self_on ? 1e-3f * self_mm : 0.0f);
     if (self_on)
-        ImGui::TextDisabled("%s contacts at its last run, ran in %s steps%s%s", grouped(s.sim().self_contacts()).c_str(),
-                            grouped(s.sim().self_collision_runs()).c_str(), implicit ? ", re-solves " : "",
+        ImGui::TextDisabled("%s contacts at its last run, %s runs%s%s%s%s", grouped(s.sim().self_contacts()).c_str(),
+                            grouped(s.sim().self_collision_runs()).c_str(), implicit ? ", sub-stepped " : "",
+                            implicit ? grouped(s.sim().self_collision_substepped()).c_str() : "",
+                            implicit ? ", re-solves " : "",
                             implicit ? grouped(s.sim().self_collision_resolves()).c_str() : "");
     float dt = 0.0f;
     const float bound = static_cast<float>(s.dt_bound());

@@ -36,6 +36,8 @@ expect_error "--dt" run --dt -1
 expect_error "--self-collision" run --self-collision 0.2
 expect_error "--self-collision" run --self-collision 0.0001
 expect_error "--self-collision" run --self-collision abc
+expect_error "--self-collision-substeps" run --self-collision-substeps 0
+expect_error "--self-collision-substeps" run --self-collision-substeps 17
 expect_error "stability bound" run --size 100 --dt 0.01
 expect_error "--integrator" run --integrator rk4
 expect_error "[100, 25000] N/m" run --stiffness 50

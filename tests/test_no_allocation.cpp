@@ -152,7 +152,7 @@ TEST(NoAllocation, SelfCollisionStepDoesNotAllocate) {
             p.self_collision.thickness = 0.004f;
             Simulation sim(std::move(scene.cloth), scene.initial, p);
             sim.step(solver == Solver::implicit ? 12 : 300); // warm-up, and down onto the ground
-            const std::size_t resolves = sim.self_collision_resolves();
+            const std::size_t resolves = sim.self_collision_resolves(), substepped = sim.self_collision_substepped();
             allocations = 0;
             counting = true;
             sim.step(solver == Solver::implicit ? 4 : 50);
@@ -162,6 +162,7 @@ TEST(NoAllocation, SelfCollisionStepDoesNotAllocate) {
             EXPECT_GT(sim.self_contacts(), 0u) << "the stage ran with contacts";
             if (solver == Solver::implicit) {
                 EXPECT_GT(sim.self_collision_resolves(), resolves) << "the contact re-solve ran while counted";
+                EXPECT_GT(sim.self_collision_substepped(), substepped) << "contact sub-steps ran while counted";
             }
         });
     }

@@ -120,6 +120,9 @@ void expect_same_spec(const SceneSpec& a, const SceneSpec& b, const std::string&
     EXPECT_EQ(p.implicit.method, q.implicit.method) << what;
     EXPECT_EQ(p.implicit.fas, q.implicit.fas) << what;
     EXPECT_EQ(p.implicit.multilevel, q.implicit.multilevel) << what;
+    EXPECT_TRUE(same_bits(p.self_collision.thickness, q.self_collision.thickness)) << what;
+    EXPECT_TRUE(same_bits(p.self_collision.friction, q.self_collision.friction)) << what;
+    EXPECT_EQ(p.self_collision.substeps, q.self_collision.substeps) << what;
     EXPECT_EQ(p.wind.enabled, q.wind.enabled) << what;
     EXPECT_TRUE(same_bits(p.wind.strength, q.wind.strength)) << what;
     EXPECT_EQ(p.aero.enabled, q.aero.enabled) << what;
@@ -249,6 +252,13 @@ TEST(SceneWrite, ImplicitSolverRoundTrips) {
     EXPECT_EQ(build_scene(back).params.dt, implicit_default_dt);
     s.dt = 0.02f;
     expect_same_spec(s, parse_scene(scene_to_json(s), "implicit_dt.json"), "implicit with dt");
+    // Self-collision's contact sub-steps: written when not the default (4).
+    s.physics.self_collision.thickness = 0.004f;
+    EXPECT_FALSE(has(scene_to_json(s), "\"substeps\"")) << "the default is left out";
+    s.physics.self_collision.substeps = 2;
+    const std::string sub = scene_to_json(s);
+    EXPECT_TRUE(has(sub, "\"substeps\": 2")) << sub;
+    expect_same_spec(s, parse_scene(sub, "substeps.json"), "implicit with contact sub-steps");
     // The explicit solver is written too (absent reads as explicit, so old files keep their meaning).
     EXPECT_TRUE(has(scene_to_json(load_scene("hang")), "\"solver\": \"explicit\""));
 }

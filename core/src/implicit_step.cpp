@@ -156,7 +156,7 @@ template <bool Parallel> void Simulation::multilevel_guess() {
     const float h = params_.dt, h2 = h * h;
     const std::array<float, 3> g = gravity_now();
     const float gx = g[0], gy = g[1], gz = g[2];
-    const double t = static_cast<double>(steps_done_) * static_cast<double>(h);
+    const double t = step_time_;
     const bool wind = params_.wind.enabled;
     const float wind_x = params_.wind.strength * static_cast<float>(std::sin(10.0 * t));
     const float wind_phase = static_cast<float>(std::fmod(10.0 * t + cloth_.origin[2], 2.0 * M_PI));
@@ -337,7 +337,7 @@ template <bool Parallel> void Simulation::implicit_step() {
     const std::array<float, 3> g = gravity_now();
     const float gx = g[0], gy = g[1], gz = g[2];
     const float g2 = gx * gx + gy * gy + gz * gz;
-    const double t = static_cast<double>(steps_done_) * static_cast<double>(h);
+    const double t = step_time_;
     const bool wind = params_.wind.enabled;
     const float wind_x = params_.wind.strength * static_cast<float>(std::sin(10.0 * t));
     const float wind_phase = static_cast<float>(std::fmod(10.0 * t + cloth_.origin[2], 2.0 * M_PI));

@@ -1019,6 +1019,7 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
     p.self_collision.thickness = static_cast<float>(thickness);
     p.self_collision.friction =
         static_cast<float>(sc.number("friction", 0.0, 2.0, "", double(p.self_collision.friction)));
+    p.self_collision.substeps = sc.integer("substeps", 1, self_collision_max_substeps, p.self_collision.substeps);
     sc.finish();
     ph.finish();
 

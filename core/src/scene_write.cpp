@@ -312,6 +312,7 @@ std::string to_json(const SceneSpec& s, const SceneState* state, const std::file
     if (p.self_collision.thickness > 0.0f) { // off: left out, as scenes written before it
         Fields sc;
         sc.add("thickness", num(p.self_collision.thickness)).add("friction", num(p.self_collision.friction));
+        if (p.self_collision.substeps != SelfCollision{}.substeps) sc.add("substeps", num(p.self_collision.substeps));
         ph.add("self_collision", sc.object());
     }
     out += "  \"physics\": " + ph.object() + ",\n";

@@ -90,6 +90,10 @@ void validate_params(const SimulationParams& p) {
                                " is outside the allowed range 0 (off) or [0.0005, 0.05] m");
         check(std::isfinite(sc.friction) && sc.friction >= 0.0f && sc.friction <= 2.0f, "self_collision.friction",
               sc.friction, "[0, 2]");
+        if (sc.substeps < 1 || sc.substeps > self_collision_max_substeps)
+            throw InvalidInput("self_collision.substeps = " + std::to_string(sc.substeps) +
+                               " is outside the allowed range [1, " + std::to_string(self_collision_max_substeps) +
+                               "] (1 = none)");
     }
     if (p.colliders.size() > 64)
         throw InvalidInput("colliders: " + std::to_string(p.colliders.size()) + " given, at most 64 allowed");

@@ -211,33 +211,74 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
     const bool implicit = params_.solver == Solver::implicit;
     // An implicit step is a whole frame's worth of substeps: the monitor looks after every few.
     const std::size_t check_every = implicit ? 8 : HealthMonitor::check_every;
+    // Contact sub-steps (docs/self_collision.md): an implicit step in which cloth touches cloth is solved again from
+    // its start as `substeps` shorter steps, and so are the steps of the next simulated second.
+    const bool sub = implicit && params_.self_collision.thickness > 0.0f && params_.self_collision.substeps > 1;
     for (std::size_t n = 0; n < count; ++n) {
         if (sewing_) update_sewing();
-        if (implicit)
-            implicit_step<Parallel>();
-        else
-            explicit_substep<Parallel>();
-        check_blocks(steps_done_);
-        // Strain limiting and collisions: when limiting is due, each sweep is followed by a collide (both honoured:
-        // a point a collider moved is limited again, and collide runs last); otherwise collide alone.
-        StateBuffer& out = buffers_[1 - current_];
-        const bool collide = !params_.colliders.empty();
-        if (!strain_limit_stage<Parallel>(out, collide) && collide) collide_stage<Parallel>(out);
-        if (params_.self_collision.thickness > 0.0f) {
-            self_collide_stage<Parallel>(out);
-            // Implicit: the contacts the pass pushed apart become planes the step is solved again with, then the pass
-            // checks the result (implicit_contact_resolve).
-            if (implicit && sc_pushed_) {
-                implicit_contact_resolve<Parallel>();
-                check_blocks(steps_done_);
-                if (!strain_limit_stage<Parallel>(out, collide) && collide) collide_stage<Parallel>(out);
-                self_collide_stage<Parallel>(out, true);
-            }
+        step_time_ = double(steps_done_) * double(params_.dt);
+        bool in_contact = sub && sc_contact_left_ > 0;
+        if (!in_contact) {
+            if (step_pipeline<Parallel>(implicit, !sub) && sub)
+                in_contact = true; // its result is dropped: the step again, in sub-steps
+            else
+                current_ = 1 - current_;
         }
-        current_ = 1 - current_;
+        if (in_contact) {
+            if (contact_substeps<Parallel>())
+                sc_contact_left_ = std::size_t(std::ceil(1.0 / double(params_.dt)));
+            else
+                --sc_contact_left_;
+            ++sc_substepped_;
+        }
         ++steps_done_;
         if (steps_done_ % check_every == 0) check_health<Parallel>();
     }
+}
+
+template <bool Parallel> bool Simulation::step_pipeline(bool implicit, bool resolve) {
+    if (implicit)
+        implicit_step<Parallel>();
+    else
+        explicit_substep<Parallel>();
+    check_blocks(steps_done_);
+    // Strain limiting and collisions: when limiting is due, each sweep is followed by a collide (both honoured: a point
+    // a collider moved is limited again, and collide runs last); otherwise collide alone.
+    StateBuffer& out = buffers_[1 - current_];
+    const bool collide = !params_.colliders.empty();
+    if (!strain_limit_stage<Parallel>(out, collide) && collide) collide_stage<Parallel>(out);
+    if (!(params_.self_collision.thickness > 0.0f)) return false;
+    self_collide_stage<Parallel>(out);
+    const bool pushed = sc_pushed_;
+    // Implicit: the contacts the pass pushed apart become planes the step is solved again with, then the pass checks
+    // the result (implicit_contact_resolve).
+    if (implicit && sc_pushed_ && resolve) {
+        implicit_contact_resolve<Parallel>();
+        check_blocks(steps_done_);
+        if (!strain_limit_stage<Parallel>(out, collide) && collide) collide_stage<Parallel>(out);
+        self_collide_stage<Parallel>(out, true);
+    }
+    return pushed;
+}
+
+template <bool Parallel> bool Simulation::contact_substeps() {
+    // params_.dt is the sub-step's length while they run (every stage reads it), and the step's again after, also
+    // when a sub-step throws.
+    struct Restore {
+        float& dt;
+        float frame;
+        ~Restore() { dt = frame; }
+    } restore{params_.dt, params_.dt};
+    const std::uint32_t k = params_.self_collision.substeps;
+    const double start = step_time_;
+    params_.dt = restore.frame / float(k);
+    bool pushed = false;
+    for (std::uint32_t j = 0; j < k; ++j) {
+        step_time_ = start + double(j) * double(params_.dt);
+        pushed = step_pipeline<Parallel>(true, true) || pushed;
+        current_ = 1 - current_;
+    }
+    return pushed;
 }
 
 /// The health monitor's check (health_monitor.hpp): on an explosion, back to the last check that passed and throw.
