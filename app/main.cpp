@@ -149,8 +149,8 @@ int main(int argc, char** argv) {
             },
             ""));
     cmd->add_option("--self-collision-substeps", run.self_collision_substeps,
-                    "Implicit solver: a step in which cloth touches cloth is solved again as K sub-steps, and so are "
-                    "the steps of the next simulated second (1 = never; docs/self_collision.md) [scene's, 4]")
+                    "Implicit solver: a step in which cloth touches cloth is solved again from its start as K "
+                    "sub-steps (1 = never; docs/self_collision.md) [scene's, 4]")
         ->check(in_range<std::uint32_t>(1, drape::self_collision_max_substeps));
     auto* obj = cmd->add_option("--export-obj", run.export_obj,
                                 "Write OBJ frames (vertices, normals, faces) into this directory");

@@ -318,9 +318,8 @@ void Viewer::ui_physics() {
     ImGui::PopItemWidth();
     help_marker("Cloth against cloth (docs/self_collision.md): points and edges closer than this thickness are pushed "
                 "apart, once something moved a quarter of it. Costly (tens of times an explicit substep). With the "
-                "implicit solver a step in which cloth touched cloth is solved again as 4 sub-steps, and so are the "
-                "steps of the next second (sub-stepped); a sub-step that pushed is solved again with the contacts "
-                "held (re-solves).");
+                "implicit solver a step in which cloth touched cloth is solved again as 4 sub-steps (sub-stepped); a "
+                "sub-step that pushed is solved again with the contacts held (re-solves).");
     if (self_changed) s.set_self_collision(self_on ? 1e-3f * self_mm : 0.0f);
     if (self_on)
         ImGui::TextDisabled("%s contacts at its last run, %s runs%s%s%s%s", grouped(s.sim().self_contacts()).c_str(),

@@ -288,8 +288,7 @@ TEST(SelfCollision, ImplicitFoldedClothNeverIntersectsItself) {
 // re-solve); the contact re-solve (implicit_contact_resolve: the step solved again with the pushed particles held on
 // their contact planes) lets the cloth around each contact follow: 53% and 38% (docs/self_collision.md, "Inside the
 // implicit solve"), but frame-long steps still pass pleats through each other. The contact sub-steps (a step in which
-// cloth touched cloth solved again as 4 steps of 1/120 s, and the next second's steps too) keep every step free of
-// intersecting pairs.
+// cloth touched cloth solved again from its start as 4 steps of 1/120 s) keep every step free of intersecting pairs.
 struct ImplicitPileRun {
     float strain = 0.0f;
     std::size_t pairs = 0, contacts = 0, substepped = 0;
@@ -326,11 +325,11 @@ TEST(SelfCollision, ImplicitCrumpledPileInContactSubStepsNeverIntersectsItself) 
     EXPECT_LT(frame.strain, 0.8f) << "a spring stretched by more than 80%";
     EXPECT_GT(frame.pairs, 0u) << "frame-long steps kept the pile apart: the test would not test the sub-steps";
     EXPECT_EQ(frame.substepped, 0u);
-    // The default: 4 sub-steps in contact, 0.5 s, every step counted (2 sub-steps: 57 pairs at worst; strain with 4
-    // measured 0.51 at worst, not healthy: docs/self_collision.md).
+    // The default: 4 sub-steps in contact, 0.5 s, every step counted (strain measured 0.30 at worst; variants of the
+    // rule gave up to 0.51: docs/self_collision.md).
     const ImplicitPileRun sub = run_implicit_pile(SelfCollision{}.substeps, 15);
     EXPECT_EQ(sub.pairs, 0u) << "intersecting triangle pairs after some step";
-    EXPECT_LT(sub.strain, 0.75f) << "a spring stretched by more than 75%";
+    EXPECT_LT(sub.strain, 0.6f) << "a spring stretched by more than 60%";
     EXPECT_GT(sub.substepped, 0u) << "no step ran in sub-steps";
 }
 
@@ -387,6 +386,7 @@ TEST(DISABLED_SelfCollisionImplicitPile, IntersectionsOverTime) {
             spec.physics.implicit.multilevel = !single;
             BuiltScene b = build_scene(spec);
             if (const char* dt = std::getenv("DRAPE_PILE_DT")) b.params.dt = float(std::atof(dt)); // default: 1/30 s
+            if (const char* k = std::getenv("DRAPE_PILE_SUBSTEPS")) b.params.self_collision.substeps = std::uint32_t(std::atoi(k));
             Simulation sim(std::move(b.cloth), b.initial, b.params);
             const auto t0 = std::chrono::steady_clock::now();
             std::printf("%s h %.3f dt %.4f:", single ? "single" : "multi", h, sim.params().dt);

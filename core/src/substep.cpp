@@ -211,25 +211,17 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
     const bool implicit = params_.solver == Solver::implicit;
     // An implicit step is a whole frame's worth of substeps: the monitor looks after every few.
     const std::size_t check_every = implicit ? 8 : HealthMonitor::check_every;
-    // Contact sub-steps (docs/self_collision.md): an implicit step in which cloth touches cloth is solved again from
-    // its start as `substeps` shorter steps, and so are the steps of the next simulated second.
+    // Contact sub-steps (docs/self_collision.md): an implicit step in which cloth touches cloth (the self-collision
+    // stage pushed) is dropped and solved again from its start as `substeps` shorter steps.
     const bool sub = implicit && params_.self_collision.thickness > 0.0f && params_.self_collision.substeps > 1;
     for (std::size_t n = 0; n < count; ++n) {
         if (sewing_) update_sewing();
         step_time_ = double(steps_done_) * double(params_.dt);
-        bool in_contact = sub && sc_contact_left_ > 0;
-        if (!in_contact) {
-            if (step_pipeline<Parallel>(implicit, !sub) && sub)
-                in_contact = true; // its result is dropped: the step again, in sub-steps
-            else
-                current_ = 1 - current_;
-        }
-        if (in_contact) {
-            if (contact_substeps<Parallel>())
-                sc_contact_left_ = std::size_t(std::ceil(1.0 / double(params_.dt)));
-            else
-                --sc_contact_left_;
+        if (step_pipeline<Parallel>(implicit, !sub) && sub) {
+            contact_substeps<Parallel>();
             ++sc_substepped_;
+        } else {
+            current_ = 1 - current_;
         }
         ++steps_done_;
         if (steps_done_ % check_every == 0) check_health<Parallel>();
@@ -261,7 +253,7 @@ template <bool Parallel> bool Simulation::step_pipeline(bool implicit, bool reso
     return pushed;
 }
 
-template <bool Parallel> bool Simulation::contact_substeps() {
+template <bool Parallel> void Simulation::contact_substeps() {
     // params_.dt is the sub-step's length while they run (every stage reads it), and the step's again after, also
     // when a sub-step throws.
     struct Restore {
@@ -272,13 +264,11 @@ template <bool Parallel> bool Simulation::contact_substeps() {
     const std::uint32_t k = params_.self_collision.substeps;
     const double start = step_time_;
     params_.dt = restore.frame / float(k);
-    bool pushed = false;
     for (std::uint32_t j = 0; j < k; ++j) {
         step_time_ = start + double(j) * double(params_.dt);
-        pushed = step_pipeline<Parallel>(true, true) || pushed;
+        step_pipeline<Parallel>(true, true);
         current_ = 1 - current_;
     }
-    return pushed;
 }
 
 /// The health monitor's check (health_monitor.hpp): on an explosion, back to the last check that passed and throw.

@@ -84,9 +84,8 @@ struct AeroWind {
 struct SelfCollision {
     float thickness = 0.0f; ///< m, 0 = off, else [0.0005, 0.05]
     float friction = 0.3f;  ///< Coulomb coefficient, [0, 2]
-    /// Implicit solver only: a step in which cloth touches cloth (the stage pushed) is solved as this many sub-steps
-    /// of dt / substeps, from its start, and so are the steps of the next simulated second (docs/self_collision.md,
-    /// "Contact sub-steps"). [1, 16]; 1 = never.
+    /// Implicit solver only: a step in which cloth touches cloth (the stage pushed) is solved again from its start as
+    /// this many sub-steps of dt / substeps (docs/self_collision.md, "Contact sub-steps"). [1, 16]; 1 = never.
     std::uint32_t substeps = 4;
 };
 inline constexpr std::uint32_t self_collision_max_substeps = 16;
@@ -249,8 +248,8 @@ class Simulation {
     std::size_t self_collision_parts() const noexcept { return sc_parts_; }
     /// Implicit steps in which self-collision pushed particles apart and the step was solved again with them held on
     /// their contact planes, since construction (docs/self_collision.md, "Inside the implicit solve").
-    /// Implicit steps solved as SelfCollision::substeps sub-steps because cloth touched cloth in them or in the
-    /// simulated second before them (self_collide.cpp, "Contact sub-steps").
+    /// Implicit steps solved again as SelfCollision::substeps sub-steps because cloth touched cloth in them
+    /// (docs/self_collision.md, "Contact sub-steps").
     std::size_t self_collision_substepped() const noexcept { return sc_substepped_; }
     std::size_t self_collision_resolves() const noexcept { return sc_resolves_; }
     /// For tests: when on, the self-collision stage tests every pair of the cloth (point-triangle and edge-edge, no
@@ -410,15 +409,14 @@ class Simulation {
     std::size_t sc_runs_ = 0;             ///< steps in which the stage ran (self_collision_runs)
     std::size_t sc_resolves_ = 0;         ///< implicit contact re-solves (self_collision_resolves)
     std::size_t sc_substepped_ = 0;       ///< implicit steps solved in sub-steps (self_collision_substepped)
-    std::size_t sc_contact_left_ = 0;     ///< steps still to be solved in sub-steps after the last contact
     /// Simulated time at the start of the step or sub-step being solved (the wind's phase), s.
     double step_time_ = 0.0;
     /// One step or sub-step of params_.dt: the solver, strain limiting and colliders, self-collision (with the
     /// implicit contact re-solve when `resolve`). Leaves the result in the other buffer; true when the stage's first
     /// run of an implicit step pushed particles apart.
     template <bool Parallel> bool step_pipeline(bool implicit, bool resolve);
-    /// The current step again, from its start, as SelfCollision::substeps implicit sub-steps; true when one pushed.
-    template <bool Parallel> bool contact_substeps();
+    /// The current step again, from its start, as SelfCollision::substeps implicit sub-steps.
+    template <bool Parallel> void contact_substeps();
     template <bool Parallel> void seam_forces_stage();
     template <bool Parallel> void aero_forces_stage();
     void cook_aero();
