@@ -6,8 +6,8 @@
 //   - point-triangle: a particle closer than h to a triangle that does not contain it;
 //   - edge-edge: two edges sharing no vertex, closer than h.
 // Pairs of 1-ring neighbours (the point shares a triangle with a vertex of the triangle; an endpoint of one edge
-// shares a triangle with an endpoint of the other) are skipped when h exceeds half the shortest edge: on such a fine
-// flat cloth they lie within h of each other at rest. On a coarser cloth they count (a sharp crease needs them).
+// shares a triangle with an endpoint of the other) are skipped when h exceeds half the shortest edge at rest: on such a
+// fine flat cloth they lie within h of each other at rest. On a coarser cloth they count (a sharp crease needs them).
 // Which side: the normal is oriented by the side the pair was on at the start of the step (the positions of buffer A),
 // so a particle that crossed a triangle during the step is put back, not pushed through.
 // Response: the pair is pushed apart to distance h along that normal, with inverse-mass weights (the point and the
@@ -125,20 +125,32 @@ void Simulation::cook_self_collision() {
             sc_edges_[2 * e + 1] = std::uint32_t(keys[e] & 0xffffffffu);
         }
         const std::size_t edges = keys.size();
-        // The mean rest length of the structural springs (of all springs if there are none) sizes the patches.
+        // The mean rest length of the structural springs (of all springs if there are none) sizes the patches. The
+        // shortest rest length of the springs along triangle edges (structural and shear) decides whether 1-ring
+        // neighbours are exempt; without such springs, the shortest triangle edge now.
         double sum = 0.0, all = 0.0;
         std::size_t count = 0;
+        float shortest = std::numeric_limits<float>::max();
         for (const Edge& e : cloth_.edges) {
             all += e.rest;
             if (e.kind == SpringKind::structural) sum += e.rest, ++count;
+            if (e.kind == SpringKind::structural || e.kind == SpringKind::shear) shortest = std::min(shortest, e.rest);
         }
         sc_mean_edge_ = count ? float(sum / double(count))
                               : (cloth_.edges.empty() ? 0.0f : float(all / double(cloth_.edges.size())));
+        if (shortest == std::numeric_limits<float>::max()) {
+            const StateBuffer& s = buffers_[current_];
+            for (std::size_t e = 0; e < keys.size(); ++e) {
+                const std::uint32_t a = std::uint32_t(keys[e] >> 32), b = std::uint32_t(keys[e] & 0xffffffffu);
+                const float dx = s.x[a] - s.x[b], dy = s.y[a] - s.y[b], dz = s.z[a] - s.z[b];
+                shortest = std::min(shortest, std::sqrt(dx * dx + dy * dy + dz * dz));
+            }
+        }
+        sc_shortest_rest_ = shortest;
         sc_tri_box_.assign(6 * tris, 0.0f);
         sc_edge_box_.assign(6 * edges, 0.0f);
         sc_acc_.assign(6 * n, 0);
         sc_hits_.assign(n, 0);
-        sc_block_shortest_.assign((edges + sc_block - 1) / sc_block, 0.0f);
         for (std::vector<float>* a : {&sc_snap_x_, &sc_snap_y_, &sc_snap_z_, &sc_end_x_, &sc_end_y_, &sc_end_z_,
                                       &sc_side_x_, &sc_side_y_, &sc_side_z_, &sc_push_x_, &sc_push_y_,
                                       &sc_push_z_, &sc_plane_c_})
@@ -160,7 +172,7 @@ void Simulation::cook_self_collision() {
     sc_patch_calm_.assign(patches, 0);
 }
 
-template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out, bool again) {
+template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out, bool again, bool tentative) {
     if (sc_acc_.empty()) cook_self_collision(); // not expected: construction and set_params cook
     sc_pushed_ = false;
     if (sc_acc_.empty()) return;                // no triangles
@@ -262,17 +274,18 @@ template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out, b
         });
     // A push may have moved a particle into a collider: the collide stage's particle pass has the last word.
     if (total > 0 && !params_.colliders.empty()) collide_stage<Parallel>(out, true, 0);
+    if (!again) ++sc_runs_;
+    if (tentative && total > 0) return; // this step is solved again from its start: the snapshot stays
     std::copy_n(out.x.data(), n, sc_snap_x_.data());
     std::copy_n(out.y.data(), n, sc_snap_y_.data());
     std::copy_n(out.z.data(), n, sc_snap_z_.data());
     sc_snap_step_ = steps_done_ + 1;
-    if (!again) ++sc_runs_;
 }
 
 template <bool Parallel>
 std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, const float* y0, const float* z0,
                                            bool& deep) {
-    const std::size_t n = cloth_.particle_count, edges = sc_edges_.size() / 2;
+    const std::size_t n = cloth_.particle_count;
     const float h = params_.self_collision.thickness;
     const double hd = h, mu = params_.self_collision.friction;
     const bool verlet = params_.integrator == Integrator::verlet;
@@ -284,22 +297,12 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
     const SelfCollisionPatches& pa = sc_patches_;
     const std::size_t patches = pa.count();
 
-    // The shortest edge decides whether 1-ring neighbours are exempt (per-block minima, then the least of those:
-    // exact whatever the order).
-    for_blocks<Parallel>(edges, [&](std::size_t begin, std::size_t end) {
-        float lo = std::numeric_limits<float>::max();
-        for (std::size_t e = begin; e < end; ++e) {
-            const std::uint32_t a = edge[2 * e], b = edge[2 * e + 1];
-            const float dx = x[a] - x[b], dy = y[a] - y[b], dz = z[a] - z[b];
-            lo = std::min(lo, dx * dx + dy * dy + dz * dz);
-        }
-        sc_block_shortest_[begin / sc_block] = lo;
-    });
-    const float shortest2 = *std::min_element(sc_block_shortest_.begin(), sc_block_shortest_.end());
     // 1-ring neighbours (a point and a triangle one edge apart, two edges across one triangle) lie about 0.7 of an
-    // edge apart on a flat cloth: within h of each other at rest once h > half the shortest edge. Only then are they
-    // exempt; on a coarser cloth they are contacts like any other (a sharp crease needs them).
-    const bool ring_exempt = h > 0.5f * std::sqrt(shortest2);
+    // edge apart on a flat cloth: within h of each other at rest once h > half the shortest edge at rest. Only then
+    // are they exempt; on a coarser cloth they are contacts like any other (a sharp crease needs them). The rest
+    // length decides, not the edges now: one edge crushed in a fold must not switch off the 1-ring contacts of the
+    // whole cloth (it did: a T-shirt's front and back crossed at the seams while an edge elsewhere was 1 mm long).
+    const bool ring_exempt = h > 0.5f * sc_shortest_rest_;
 
     // Per patch: the boxes of its triangles (grown by h) and edges (grown by h / 2), in patch order; its own box;
     // its cone of normals.
@@ -708,7 +711,7 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
     return found;
 }
 
-template void Simulation::self_collide_stage<true>(StateBuffer&, bool);
-template void Simulation::self_collide_stage<false>(StateBuffer&, bool);
+template void Simulation::self_collide_stage<true>(StateBuffer&, bool, bool);
+template void Simulation::self_collide_stage<false>(StateBuffer&, bool, bool);
 
 } // namespace drape

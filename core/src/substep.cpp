@@ -240,7 +240,7 @@ template <bool Parallel> bool Simulation::step_pipeline(bool implicit, bool reso
     const bool collide = !params_.colliders.empty();
     if (!strain_limit_stage<Parallel>(out, collide) && collide) collide_stage<Parallel>(out);
     if (!(params_.self_collision.thickness > 0.0f)) return false;
-    self_collide_stage<Parallel>(out);
+    self_collide_stage<Parallel>(out, false, implicit && !resolve);
     const bool pushed = sc_pushed_;
     // Implicit: the contacts the pass pushed apart become planes the step is solved again with, then the pass checks
     // the result (implicit_contact_resolve).

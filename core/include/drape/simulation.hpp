@@ -371,7 +371,10 @@ class Simulation {
     // which threads add).
     /// `again`: this step's second run (after the implicit contact re-solve): the motion it covers starts at the first
     /// run's end (its snapshot), where the pairs were pushed apart.
-    template <bool Parallel> void self_collide_stage(StateBuffer& out, bool again = false);
+    /// `tentative`: the step is dropped if this run pushes (an implicit step about to be solved again in contact
+    /// sub-steps), so a run that pushed keeps the previous snapshot: the sub-steps' first run covers the motion
+    /// from there (a grab's jump included).
+    template <bool Parallel> void self_collide_stage(StateBuffer& out, bool again = false, bool tentative = false);
     template <bool Parallel>
     std::size_t self_collide_round(StateBuffer& out, const float* x0, const float* y0, const float* z0, bool& deep);
     void cook_self_collision();
@@ -389,7 +392,7 @@ class Simulation {
     bool sc_reference_ = false;         ///< set_self_collision_reference
     std::vector<std::int64_t> sc_acc_;  ///< per particle: dx, dy, dz, dvx, dvy, dvz (fixed point)
     std::vector<std::uint32_t> sc_hits_; ///< per particle: contacts that pushed it
-    std::vector<float> sc_block_shortest_;    ///< per block of edges: the shortest edge, squared
+    float sc_shortest_rest_ = 0.0f; ///< shortest rest length along a triangle edge (1-ring exemption), m
     std::size_t sc_contacts_ = 0;        ///< contacts applied in the last run's first round (self_contacts)
     // The snapshot of the last run (positions after its pushes, and the step it ended): the stage runs again only once
     // some particle has moved more than a quarter of the thickness from it, and takes each pair's side from it.
