@@ -316,7 +316,7 @@ void Simulation::check_blocks(std::size_t step_index) {
             for (float v : vals)
                 if (!std::isfinite(v))
                     throw SimulationError("non-finite state at substep " + std::to_string(step_index + 1) +
-                                          " (t = " + std::to_string((step_index + 1) * double(params_.dt)) +
+                                          " (t = " + std::to_string(step_time_ + double(params_.dt)) +
                                           " s), particle " + std::to_string(i) +
                                           ": the step is unstable; lower dt or stiffness");
         }
