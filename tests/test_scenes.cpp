@@ -156,14 +156,15 @@ INSTANTIATE_TEST_SUITE_P(
                 "physics.implicit.method = \"sor\" is not one of \"gauss_seidel\", \"jacobi\""},
         BadFile{"implicit_multilevel", R"({"physics": {"implicit": {"multilevel": 1}}})",
                 "physics.implicit.multilevel must be true or false"},
+        BadFile{"implicit_unknown", R"({"physics": {"implicit": {"sweeps": 3}}})",
+                "physics.implicit.sweeps is not a known field"},
+        // Self-collision's contact sub-steps.
         BadFile{"self_collision_substeps_zero", R"({"physics": {"self_collision": {"substeps": 0}}})",
                 "physics.self_collision.substeps = 0 is outside the allowed range [1, 16]"},
         BadFile{"self_collision_substeps_big", R"({"physics": {"self_collision": {"substeps": 17}}})",
                 "physics.self_collision.substeps = 17 is outside the allowed range [1, 16]"},
         BadFile{"self_collision_substeps_fraction", R"({"physics": {"self_collision": {"substeps": 1.5}}})",
                 "physics.self_collision.substeps must be a whole number in [1, 16]"},
-        BadFile{"implicit_unknown", R"({"physics": {"implicit": {"sweeps": 3}}})",
-                "physics.implicit.sweeps is not a known field"},
         // Numbers a double cannot hold, and NaN / Infinity (not JSON): a range error at the field, never an abort.
         BadFile{"overflow_n", R"({"cloth": {"n": 1e400}})",
                 "cloth.n = 1e400 is not a finite number; allowed range [2, 4096]"},

@@ -254,6 +254,13 @@ template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out, b
         }
     }
     sc_parts_ = std::size_t(parts);
+    if (!again) ++sc_runs_;
+    // A tentative run that pushed: its step is solved again from its start in sub-steps. Its result is dropped, so
+    // nothing more is done for it (no planes, no collide pass), and the snapshot stays the last one before the step.
+    if (tentative && total > 0) {
+        sc_pushed_ = true;
+        return;
+    }
     // For the implicit solver's contact re-solve (after a step's first run): each pushed particle's contact plane, the
     // unit normal along its total push in this run (normalised in place), through where the run left it.
     sc_pushed_ = total > 0 && track;
@@ -274,8 +281,6 @@ template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out, b
         });
     // A push may have moved a particle into a collider: the collide stage's particle pass has the last word.
     if (total > 0 && !params_.colliders.empty()) collide_stage<Parallel>(out, true, 0);
-    if (!again) ++sc_runs_;
-    if (tentative && total > 0) return; // this step is solved again from its start: the snapshot stays
     std::copy_n(out.x.data(), n, sc_snap_x_.data());
     std::copy_n(out.y.data(), n, sc_snap_y_.data());
     std::copy_n(out.z.data(), n, sc_snap_z_.data());

@@ -217,7 +217,7 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
     for (std::size_t n = 0; n < count; ++n) {
         if (sewing_) update_sewing();
         step_time_ = double(steps_done_) * double(params_.dt);
-        if (step_pipeline<Parallel>(implicit, !sub) && sub) {
+        if (step_pipeline<Parallel>(implicit, sub)) {
             contact_substeps<Parallel>();
             ++sc_substepped_;
         } else {
@@ -228,7 +228,7 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
     }
 }
 
-template <bool Parallel> bool Simulation::step_pipeline(bool implicit, bool resolve) {
+template <bool Parallel> bool Simulation::step_pipeline(bool implicit, bool attempt) {
     if (implicit)
         implicit_step<Parallel>();
     else
@@ -240,17 +240,17 @@ template <bool Parallel> bool Simulation::step_pipeline(bool implicit, bool reso
     const bool collide = !params_.colliders.empty();
     if (!strain_limit_stage<Parallel>(out, collide) && collide) collide_stage<Parallel>(out);
     if (!(params_.self_collision.thickness > 0.0f)) return false;
-    self_collide_stage<Parallel>(out, false, implicit && !resolve);
-    const bool pushed = sc_pushed_;
+    self_collide_stage<Parallel>(out, false, attempt);
+    if (attempt && sc_pushed_) return true; // dropped: solved again in sub-steps
     // Implicit: the contacts the pass pushed apart become planes the step is solved again with, then the pass checks
     // the result (implicit_contact_resolve).
-    if (implicit && sc_pushed_ && resolve) {
+    if (implicit && sc_pushed_) {
         implicit_contact_resolve<Parallel>();
         check_blocks(steps_done_);
         if (!strain_limit_stage<Parallel>(out, collide) && collide) collide_stage<Parallel>(out);
         self_collide_stage<Parallel>(out, true);
     }
-    return pushed;
+    return false;
 }
 
 template <bool Parallel> void Simulation::contact_substeps() {
@@ -266,7 +266,7 @@ template <bool Parallel> void Simulation::contact_substeps() {
     params_.dt = restore.frame / float(k);
     for (std::uint32_t j = 0; j < k; ++j) {
         step_time_ = start + double(j) * double(params_.dt);
-        step_pipeline<Parallel>(true, true);
+        step_pipeline<Parallel>(true, false);
         current_ = 1 - current_;
     }
 }

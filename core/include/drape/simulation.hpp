@@ -372,8 +372,8 @@ class Simulation {
     /// `again`: this step's second run (after the implicit contact re-solve): the motion it covers starts at the first
     /// run's end (its snapshot), where the pairs were pushed apart.
     /// `tentative`: the step is dropped if this run pushes (an implicit step about to be solved again in contact
-    /// sub-steps), so a run that pushed keeps the previous snapshot: the sub-steps' first run covers the motion
-    /// from there (a grab's jump included).
+    /// sub-steps), so a run that pushed stops there (sc_pushed_ set) and keeps the previous snapshot: the sub-steps'
+    /// first run covers the motion from there (a grab's jump included).
     template <bool Parallel> void self_collide_stage(StateBuffer& out, bool again = false, bool tentative = false);
     template <bool Parallel>
     std::size_t self_collide_round(StateBuffer& out, const float* x0, const float* y0, const float* z0, bool& deep);
@@ -415,9 +415,9 @@ class Simulation {
     /// Simulated time at the start of the step or sub-step being solved (the wind's phase), s.
     double step_time_ = 0.0;
     /// One step or sub-step of params_.dt: the solver, strain limiting and colliders, self-collision (with the
-    /// implicit contact re-solve when `resolve`). Leaves the result in the other buffer; true when the stage's first
-    /// run of an implicit step pushed particles apart.
-    template <bool Parallel> bool step_pipeline(bool implicit, bool resolve);
+    /// implicit contact re-solve when it pushed). Leaves the result in the other buffer. `attempt` (implicit, contact
+    /// sub-steps on): returns true, at once, when the stage pushed: the step is to be solved again in sub-steps.
+    template <bool Parallel> bool step_pipeline(bool implicit, bool attempt);
     /// The current step again, from its start, as SelfCollision::substeps implicit sub-steps.
     template <bool Parallel> void contact_substeps();
     template <bool Parallel> void seam_forces_stage();
