@@ -768,11 +768,13 @@ TEST(SelfCollision, SceneFieldsReadWrittenAndRefused) {
 // and without self-collision, each timed over a first phase (the top half settles onto the bottom half: explicit 300
 // steps, 20 at N > 200; implicit 3) and a second (resting: explicit 100 steps, 10 at N > 200; implicit 4); per step,
 // and how many of the steps ran the stage. Run: drape_tests --gtest_also_run_disabled_tests
-// --gtest_filter='*SelfCollisionCost*' (DRAPE_SC_N=316 for N = 316)
+// --gtest_filter='*SelfCollisionCost*' (DRAPE_SC_N=316 for N = 316; DRAPE_SC_SOLVER=implicit or explicit for one solver)
 TEST(DISABLED_SelfCollisionCost, PerStep) {
     const char* only = std::getenv("DRAPE_SC_N"); // e.g. 316; default 100
+    const char* which = std::getenv("DRAPE_SC_SOLVER"); // explicit or implicit; default both
     for (std::uint32_t n : {only ? std::uint32_t(std::atoi(only)) : 100u})
         for (Solver solver : {Solver::explicit_euler, Solver::implicit}) {
+            if (which && std::string(which) != (solver == Solver::implicit ? "implicit" : "explicit")) continue;
             HangParams hp;
             hp.n = n;
             hp.pins = GridPins::none;

@@ -173,7 +173,9 @@ float contact_project(std::span<const Collider> colliders, const float p0[3], fl
     float mu = -1.0f;
     for (const Collider& c : colliders) {
         if (!is_inside(c, {p[0], p[1], p[2]})) continue;
-        if (is_inside(c, {p0[0], p0[1], p0[2]})) { // started inside: the nearest surface point
+        // Started inside, or a plane (its tangent plane at the entry point is the plane itself, so the search for
+        // the entry point below would end where projecting does): the nearest surface point.
+        if (c.kind == ColliderKind::plane || is_inside(c, {p0[0], p0[1], p0[2]})) {
             const Contact ct = project_point(c, {p[0], p[1], p[2]});
             for (int k = 0; k < 3; ++k) {
                 p[k] = ct.point[k];
