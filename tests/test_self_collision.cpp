@@ -500,6 +500,28 @@ TEST(SelfCollision, ImplicitGrabJumpThroughALayerIsPutBack) {
     }
     EXPECT_GT(sim.self_collision_substepped(), 0u) << "the jump did not make a step touch: not the case tested";
     EXPECT_EQ(worst, 0u) << "the grabbed particle was kept on the far side of the layer it jumped through";
+    // The sub-steps ran half the step's sweeps each, and gave the step's length and sweeps back.
+    EXPECT_EQ(sim.params().dt, pile.params.dt);
+    EXPECT_EQ(sim.params().implicit.iterations, pile.params.implicit.iterations);
+}
+
+TEST(SelfCollision, ContactSubStepsRunHalfTheSweepsOfTheStep) {
+    for (std::uint32_t iterations : {30u, 7u}) {
+        Pile pile = folded_pile(0.004f, Solver::implicit);
+        pile.params.implicit.iterations = iterations;
+        pile.params.implicit.tolerance = 0.0f;
+        Simulation sim(std::move(pile.scene.cloth), pile.scene.initial, pile.params);
+        std::uint32_t touched = 0, alone = 0;
+        for (int s = 0; s < 12; ++s) {
+            const std::size_t before = sim.self_collision_substepped();
+            sim.step(1);
+            const bool sub = sim.self_collision_substepped() > before;
+            EXPECT_EQ(sim.implicit_stats().iterations, sub ? (iterations + 1) / 2 : iterations) << "step " << s;
+            (sub ? touched : alone) += 1;
+            EXPECT_EQ(sim.params().implicit.iterations, iterations);
+        }
+        EXPECT_GT(touched, 0u) << "no step in sub-steps: not the case tested";
+    }
 }
 
 TEST(SelfCollision, BitwiseSameForEveryThreadCount) {

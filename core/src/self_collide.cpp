@@ -247,16 +247,18 @@ template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out, b
         }
         for (int round = 0; round < self_collide_rounds; ++round) {
             bool deep = false;
-            const std::size_t found = self_collide_round<Parallel>(out, x0, y0, z0, deep);
+            const std::size_t found = self_collide_round<Parallel>(out, x0, y0, z0, deep, tentative);
             if (round == 0) sc_contacts_ = found;
             total += found;
             if (!deep) break; // another round only when a pair was pushed by more than half the thickness
         }
+        if (tentative && total > 0) break; // the step is solved again: whether it pushed is all that is wanted
     }
     sc_parts_ = std::size_t(parts);
     if (!again) ++sc_runs_;
-    // A tentative run that pushed: its step is solved again from its start in sub-steps. Its result is dropped, so
-    // nothing more is done for it (no planes, no collide pass), and the snapshot stays the last one before the step.
+    // A tentative run that would have pushed (it stops at the first contact, pushing nothing): its step is solved
+    // again from its start in sub-steps. Its result is dropped, so nothing more is done for it (no planes, no collide
+    // pass), and the snapshot stays the last one before the step.
     if (tentative && total > 0) {
         sc_pushed_ = true;
         return;
@@ -289,7 +291,7 @@ template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out, b
 
 template <bool Parallel>
 std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, const float* y0, const float* z0,
-                                           bool& deep) {
+                                           bool& deep, bool probe) {
     const std::size_t n = cloth_.particle_count;
     const float h = params_.self_collision.thickness;
     const double hd = h, mu = params_.self_collision.friction;
@@ -453,6 +455,8 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
         }
     };
     std::atomic<bool> deep_any{false};
+    // A probe only asks whether any pair is a contact: the first one stops the search, and nothing is pushed.
+    std::atomic<bool> stop{false};
     // The response of a pair with weights alpha (signed: + on the first side, - on the second) along unit n, gap d.
     auto respond = [&](const std::uint32_t* v, const double* alpha, int count, V3 nrm, double d) {
         double wsum = 0.0, coef[4];
@@ -466,6 +470,10 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
         for (int k = 0; k < count; ++k) coef[k] /= wsum;
         const double vn = geom::dot(vrel, nrm);
         if (hd - d < settled * hd && vn >= 0.0) return false; // held at the thickness already, not approaching
+        if (probe) {
+            stop.store(true, std::memory_order_relaxed);
+            return true;
+        }
         if (hd - d > 0.5 * hd) deep_any.store(true, std::memory_order_relaxed);
         const V3 push = (hd - d) * nrm;
         V3 dv{0.0, 0.0, 0.0};
@@ -656,6 +664,7 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
         for_blocks<Parallel>(patches, [&](std::size_t begin, std::size_t end) {
             std::size_t local = 0;
             for (std::size_t pi = begin; pi < end; ++pi) {
+                if (probe && stop.load(std::memory_order_relaxed)) break;
                 const std::uint32_t p = std::uint32_t(pi);
                 if (!calm[p]) local += patch_pair(p, p);
                 const float* bp = patch_box + 6 * p;
@@ -684,6 +693,7 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
     const std::size_t found = contacts.load();
     deep = deep_any.load();
     if (found == 0) return 0;
+    if (probe) return 1; // nothing was deposited
     // Per particle: the mean of what its contacts asked; the accumulators are cleared for the next round.
     for_blocks<Parallel>(n, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) {

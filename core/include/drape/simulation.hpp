@@ -372,11 +372,13 @@ class Simulation {
     /// `again`: this step's second run (after the implicit contact re-solve): the motion it covers starts at the first
     /// run's end (its snapshot), where the pairs were pushed apart.
     /// `tentative`: the step is dropped if this run pushes (an implicit step about to be solved again in contact
-    /// sub-steps), so a run that pushed stops there (sc_pushed_ set) and keeps the previous snapshot: the sub-steps'
-    /// first run covers the motion from there (a grab's jump included).
+    /// sub-steps), so it only probes: it stops at its first contact, pushing nothing (sc_pushed_ set), and keeps the
+    /// previous snapshot: the sub-steps' first run covers the motion from there (a grab's jump included).
+    /// `probe` (self_collide_round): stop at the first contact and push nothing; returns 1 if there was one.
     template <bool Parallel> void self_collide_stage(StateBuffer& out, bool again = false, bool tentative = false);
     template <bool Parallel>
-    std::size_t self_collide_round(StateBuffer& out, const float* x0, const float* y0, const float* z0, bool& deep);
+    std::size_t self_collide_round(StateBuffer& out, const float* x0, const float* y0, const float* z0, bool& deep,
+                                   bool probe);
     void cook_self_collision();
     std::vector<std::uint32_t> sc_edges_;            ///< 2 per edge, a < b
     std::vector<std::uint32_t> sc_sewn_; ///< per particle: the lowest particle sewn to it through seams (itself if none)
