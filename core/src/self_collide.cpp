@@ -46,6 +46,7 @@
 #include <limits>
 
 #include "closest_points.hpp"
+#include "self_collide_hash.hpp"
 #include "self_collide_patches.hpp"
 #include "drape/simulation.hpp"
 
@@ -62,15 +63,6 @@ constexpr std::size_t sc_block = 256;         // particles / primitives per para
 constexpr float flat_cone = 1.0471976f;       // 60 degrees: the widest cone of normals a flat piece may have
 
 inline V3 cross(V3 a, V3 b) noexcept { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-
-inline std::uint32_t bucket_of(std::int64_t i, std::int64_t j, std::int64_t k, std::uint32_t mask) noexcept {
-    std::uint64_t h = std::uint64_t(i) * 0x9E3779B185EBCA87ull ^ std::uint64_t(j) * 0xC2B2AE3D27D4EB4Full ^
-                      std::uint64_t(k) * 0x165667B19E3779F9ull;
-    h ^= h >> 29;
-    h *= 0xBF58476D1CE4E5B9ull;
-    h ^= h >> 32;
-    return std::uint32_t(h) & mask;
-}
 
 inline std::size_t pow2_at_least(std::size_t v) noexcept {
     std::size_t p = 1;
@@ -170,6 +162,94 @@ void Simulation::cook_self_collision() {
     sc_patch_box_.assign(6 * patches, 0.0f);
     sc_patch_cone_.assign(5 * patches, 0.0f);
     sc_patch_calm_.assign(patches, 0);
+    sc_patch_sweep_.assign(6 * patches, 0.0f);
+    sc_patch_motion_.assign(4 * patches, 0.0f);
+    sc_patch_relative_.assign(patches, 0.0f);
+}
+
+template <bool Parallel>
+float Simulation::self_collide_relative_motion(const StateBuffer& out, const float* xa, const float* ya,
+                                               const float* za) {
+    const SelfCollisionPatches& pa = sc_patches_;
+    const std::size_t patches = pa.count();
+    if (patches == 0) return 0.0f;
+    const float h = params_.self_collision.thickness;
+    const std::uint32_t* tri = cloth_.triangles.data();
+    const std::uint32_t* edge = sc_edges_.data();
+    float* sweep = sc_patch_sweep_.data();
+    float* motion = sc_patch_motion_.data();
+    // Per patch, over every particle a primitive of it holds (its triangles' corners, its points, its edges' ends):
+    // the swept box, and the box of the displacements, whose centre c and half-diagonal r bound each displacement d
+    // by |d - c| <= r.
+    for_blocks<Parallel>(patches, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t p = begin; p < end; ++p) {
+            float lo[3], hi[3], dlo[3], dhi[3];
+            for (int c = 0; c < 3; ++c) {
+                lo[c] = dlo[c] = std::numeric_limits<float>::max();
+                hi[c] = dhi[c] = std::numeric_limits<float>::lowest();
+            }
+            auto take = [&](std::uint32_t i) {
+                const float a[3] = {xa[i], ya[i], za[i]}, b[3] = {out.x[i], out.y[i], out.z[i]};
+                for (int c = 0; c < 3; ++c) {
+                    lo[c] = std::min({lo[c], a[c], b[c]});
+                    hi[c] = std::max({hi[c], a[c], b[c]});
+                    dlo[c] = std::min(dlo[c], b[c] - a[c]);
+                    dhi[c] = std::max(dhi[c], b[c] - a[c]);
+                }
+            };
+            for (std::uint32_t s = pa.tri_start[p]; s < pa.tri_start[p + 1]; ++s)
+                for (int k = 0; k < 3; ++k) take(tri[3 * pa.tris[s] + k]);
+            for (std::uint32_t s = pa.point_start[p]; s < pa.point_start[p + 1]; ++s) take(pa.points[s]);
+            for (std::uint32_t s = pa.edge_start[p]; s < pa.edge_start[p + 1]; ++s)
+                take(edge[2 * pa.edges[s]]), take(edge[2 * pa.edges[s] + 1]);
+            float* sw = sweep + 6 * p;
+            float* m = motion + 4 * p;
+            if (!(dlo[0] <= dhi[0])) { // nothing in it: a box that meets none
+                for (int c = 0; c < 3; ++c) sw[c] = std::numeric_limits<float>::max(), sw[3 + c] = std::numeric_limits<float>::lowest(), m[c] = 0.0f;
+                m[3] = 0.0f;
+                continue;
+            }
+            float r2 = 0.0f;
+            for (int c = 0; c < 3; ++c) {
+                sw[c] = lo[c] - 0.5f * h;
+                sw[3 + c] = hi[c] + 0.5f * h;
+                m[c] = 0.5f * (dlo[c] + dhi[c]);
+                r2 += (dhi[c] - dlo[c]) * (dhi[c] - dlo[c]);
+            }
+            m[3] = 0.5f * std::sqrt(r2);
+        }
+    });
+    // Two particles of patches p and q: |d_i - d_j| <= |c_p - c_q| + r_p + r_q. Only patches whose swept boxes meet can
+    // come within h of each other during the motion.
+    auto pair = [&](std::size_t p, std::size_t q) {
+        const float *a = motion + 4 * p, *b = motion + 4 * q;
+        const float dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+        return std::sqrt(dx * dx + dy * dy + dz * dz) + a[3] + b[3];
+    };
+    float* relative = sc_patch_relative_.data();
+    if (sc_reference_) { // every pair of patches (the tests compare the hash with it)
+        for (std::size_t p = 0; p < patches; ++p) {
+            float r = 2.0f * motion[4 * p + 3];
+            const float* bp = sweep + 6 * p;
+            for (std::size_t q = p + 1; q < patches; ++q) {
+                const float* bq = sweep + 6 * q;
+                if (bp[3] < bq[0] || bq[3] < bp[0] || bp[4] < bq[1] || bq[4] < bp[1] || bp[5] < bq[2] || bq[5] < bp[2])
+                    continue;
+                r = std::max(r, pair(p, q));
+            }
+            relative[p] = r;
+        }
+    } else {
+        const PatchHash hash(sweep, patches, sc_cell_count_, sc_cell_start_, sc_cell_items_);
+        for_blocks<Parallel>(patches, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t p = begin; p < end; ++p) {
+                float r = 2.0f * motion[4 * p + 3];
+                hash.overlapping(std::uint32_t(p), [&](std::uint32_t q) { r = std::max(r, pair(p, q)); });
+                relative[p] = r;
+            }
+        });
+    }
+    return *std::max_element(relative, relative + patches);
 }
 
 template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out, bool again, bool tentative) {
@@ -210,11 +290,20 @@ template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out, b
         std::fill(sc_push_y_.data() + begin, sc_push_y_.data() + end, 0.0f);
         std::fill(sc_push_z_.data() + begin, sc_push_z_.data() + end, 0.0f);
     });
-    // Sub-steps: the motion from there to here, cut into K equal parts that move no particle more than h / 2, so that
-    // no pair closes by more than h within one and a pair that crosses is still within h of the other side at its end,
-    // with its side from the part's start (a large implicit step moves the cloth several thicknesses). K = 1 unless a
-    // particle moved more than h / 2; at most self_collide_substeps (then a part may move more).
-    const int parts = most > 0.5f * h ? int(std::min(float(self_collide_substeps), std::ceil(most / (0.5f * h)))) : 1;
+    // Sub-steps: the motion from there to here, cut into K equal parts in which no particle moves by more than h / 2
+    // relative to any particle that can come near it (the particles of patches whose swept boxes meet), so that no
+    // pair closes by more than h / 2 within one and a pair that crosses is still well within h of the other side at
+    // its end, with its side from the part's start (a large implicit step moves the cloth several thicknesses).
+    // Relative motion, not motion: a swinging cloth moves fast but mostly as a whole. The rule before (no particle
+    // moves more than h / 2 in a part, so relative motions up to h) cut the N = 100 hang's runs into ~19 parts by its
+    // fastest particle; relative motion up to h (not h / 2) let the crumpled pile cross itself twice in seven runs
+    // (docs/self_collision.md, "Parts"). K = 1 unless a particle moved more than h / 2; at most self_collide_substeps
+    // (then a part may move more).
+    int parts = 1;
+    if (most > 0.5f * h) {
+        const float relative = self_collide_relative_motion<Parallel>(out, xa, ya, za);
+        if (relative > 0.5f * h) parts = int(std::min(float(self_collide_substeps), std::ceil(relative / (0.5f * h))));
+    }
     if (parts > 1) { // the motion's end kept; the parts start where the motion does
         std::copy_n(out.x.data(), n, sc_end_x_.data());
         std::copy_n(out.y.data(), n, sc_end_y_.data());
@@ -626,65 +715,16 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
             for (std::uint32_t f = e + 1; f < pa.edges.size(); ++f) found += edge_edge(e, f);
         contacts.store(found);
     } else {
-        // Spatial hash of the patches: cubic cells as wide as the widest patch box, so a box spans at most 2 cells
-        // an axis; counting sort (serial: there are about 30 times fewer patches than particles).
-        float widest = 0.0f;
-        for (std::size_t p = 0; p < patches; ++p)
-            for (int c = 0; c < 3; ++c) widest = std::max(widest, patch_box[6 * p + 3 + c] - patch_box[6 * p + c]);
-        const float inv_cell = 1.0f / (1.01f * widest);
-        auto cell_of = [&](float v) { return std::int64_t(std::floor(v * inv_cell)); };
-        const std::uint32_t mask = std::uint32_t(sc_cell_count_.size() - 1);
-        auto each_bucket = [&](std::size_t p, auto&& f) {
-            const float* b = patch_box + 6 * p;
-            std::int64_t lo[3];
-            int cnt[3];
-            for (int c = 0; c < 3; ++c) lo[c] = cell_of(b[c]), cnt[c] = cell_of(b[3 + c]) > lo[c] ? 2 : 1;
-            std::uint32_t seen[8];
-            int nseen = 0;
-            for (int i = 0; i < cnt[0]; ++i)
-                for (int j = 0; j < cnt[1]; ++j)
-                    for (int k = 0; k < cnt[2]; ++k) {
-                        const std::uint32_t bk = bucket_of(lo[0] + i, lo[1] + j, lo[2] + k, mask);
-                        f(bk, std::find(seen, seen + nseen, bk) != seen + nseen); // again: seen for another cell
-                        seen[nseen++] = bk;
-                    }
-        };
-        std::fill(sc_cell_count_.begin(), sc_cell_count_.end(), 0u);
-        for (std::size_t p = 0; p < patches; ++p)
-            each_bucket(p, [&](std::uint32_t bk, bool again) { sc_cell_count_[bk] += again ? 0 : 1; });
-        sc_cell_start_[0] = 0;
-        for (std::size_t k = 0; k < sc_cell_count_.size(); ++k) {
-            sc_cell_start_[k + 1] = sc_cell_start_[k] + sc_cell_count_[k];
-            sc_cell_count_[k] = sc_cell_start_[k]; // now the bucket's fill cursor
-        }
-        for (std::size_t p = 0; p < patches; ++p)
-            each_bucket(p, [&](std::uint32_t bk, bool again) {
-                if (!again) sc_cell_items_[sc_cell_count_[bk]++] = std::uint32_t(p);
-            });
+        // Spatial hash of the patch boxes (self_collide_hash.hpp).
+        const PatchHash hash(patch_box, patches, sc_cell_count_, sc_cell_start_, sc_cell_items_);
         for_blocks<Parallel>(patches, [&](std::size_t begin, std::size_t end) {
             std::size_t local = 0;
             for (std::size_t pi = begin; pi < end; ++pi) {
                 if (probe && stop.load(std::memory_order_relaxed)) break;
                 const std::uint32_t p = std::uint32_t(pi);
                 if (!calm[p]) local += patch_pair(p, p);
-                const float* bp = patch_box + 6 * p;
-                each_bucket(p, [&](std::uint32_t bk, bool again) {
-                    if (again) return; // this bucket was searched for another of p's cells
-                    for (std::uint32_t k = sc_cell_start_[bk]; k < sc_cell_start_[bk + 1]; ++k) {
-                        const std::uint32_t q = sc_cell_items_[k];
-                        if (q <= p) continue;
-                        const float* bq = patch_box + 6 * q;
-                        if (bp[3] < bq[0] || bq[3] < bp[0] || bp[4] < bq[1] || bq[4] < bp[1] || bp[5] < bq[2] ||
-                            bq[5] < bp[2])
-                            continue;
-                        // The pair once: where the low corner of the two boxes' intersection lies (in p's cells
-                        // and in q's, so q is in that cell's bucket).
-                        const std::int64_t corner[3] = {cell_of(std::max(bp[0], bq[0])), cell_of(std::max(bp[1], bq[1])),
-                                                        cell_of(std::max(bp[2], bq[2]))};
-                        if (bucket_of(corner[0], corner[1], corner[2], mask) != bk) continue;
-                        if (on_flat_piece(p, q)) continue;
-                        local += patch_pair(p, q);
-                    }
+                hash.overlapping(p, [&](std::uint32_t q) {
+                    if (!on_flat_piece(p, q)) local += patch_pair(p, q);
                 });
             }
             if (local) contacts.fetch_add(local, std::memory_order_relaxed);
@@ -726,6 +766,10 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
     return found;
 }
 
+template float Simulation::self_collide_relative_motion<true>(const StateBuffer&, const float*, const float*,
+                                                               const float*);
+template float Simulation::self_collide_relative_motion<false>(const StateBuffer&, const float*, const float*,
+                                                                const float*);
 template void Simulation::self_collide_stage<true>(StateBuffer&, bool, bool);
 template void Simulation::self_collide_stage<false>(StateBuffer&, bool, bool);
 

@@ -379,6 +379,10 @@ class Simulation {
     template <bool Parallel>
     std::size_t self_collide_round(StateBuffer& out, const float* x0, const float* y0, const float* z0, bool& deep,
                                    bool probe);
+    /// The largest displacement, over the motion from (xa, ya, za) to `out`, of one particle relative to another
+    /// of a patch whose swept box meets its own patch's (self_collide.cpp): the run's parts bound it by h.
+    template <bool Parallel>
+    float self_collide_relative_motion(const StateBuffer& out, const float* xa, const float* ya, const float* za);
     void cook_self_collision();
     std::vector<std::uint32_t> sc_edges_;            ///< 2 per edge, a < b
     std::vector<std::uint32_t> sc_sewn_; ///< per particle: the lowest particle sewn to it through seams (itself if none)
@@ -391,6 +395,10 @@ class Simulation {
     std::vector<float> sc_patch_box_;   ///< per patch: the box of its triangles' grown boxes and its particles +- h
     std::vector<float> sc_patch_cone_;  ///< per patch: unit axis (3), half-angle (rad; > pi: none), least altitude (m)
     std::vector<std::uint8_t> sc_patch_calm_; ///< per patch: it and the patches it touches lie flat (self_collide.cpp)
+    // Per patch, over a run's motion: the box swept by its particles (grown by h / 2); the centre of its particles'
+    // displacements (3) and their largest distance from it (1); the largest relative displacement with a patch whose
+    // swept box meets it.
+    std::vector<float> sc_patch_sweep_, sc_patch_motion_, sc_patch_relative_;
     bool sc_reference_ = false;         ///< set_self_collision_reference
     std::vector<std::int64_t> sc_acc_;  ///< per particle: dx, dy, dz, dvx, dvy, dvz (fixed point)
     std::vector<std::uint32_t> sc_hits_; ///< per particle: contacts that pushed it
