@@ -290,19 +290,20 @@ template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out, b
         std::fill(sc_push_y_.data() + begin, sc_push_y_.data() + end, 0.0f);
         std::fill(sc_push_z_.data() + begin, sc_push_z_.data() + end, 0.0f);
     });
-    // Sub-steps: the motion from there to here, cut into K equal parts in which no particle moves by more than h / 2
-    // relative to any particle that can come near it (the particles of patches whose swept boxes meet), so that no
-    // pair closes by more than h / 2 within one and a pair that crosses is still well within h of the other side at
-    // its end, with its side from the part's start (a large implicit step moves the cloth several thicknesses).
-    // Relative motion, not motion: a swinging cloth moves fast but mostly as a whole. The rule before (no particle
-    // moves more than h / 2 in a part, so relative motions up to h) cut the N = 100 hang's runs into ~19 parts by its
-    // fastest particle; relative motion up to h (not h / 2) let the crumpled pile cross itself twice in seven runs
+    // Sub-steps: the motion from there to here, cut into K equal parts, so that no pair closes by more than h within
+    // one and a pair that crosses is still within h of the other side at its end, with its side from the part's start
+    // (a large implicit step moves the cloth several thicknesses). Two bounds, the smaller taken: no particle moves
+    // more than h / 2 in a part (so no pair closes by more than h), or no particle moves more than h / 2 relative to
+    // any particle that can come near it (the particles of patches whose swept boxes meet; self_collide_relative_motion).
+    // The second is the smaller where cloth moves fast but as a whole (the N = 100 hang: ~19 parts a run by its fastest
+    // particle), the first where layers meet head on (a crumpled pile). Relative motion up to h per part, the first
+    // rule's worst case, let the pile cross itself twice in seven runs where the first rule alone let it once
     // (docs/self_collision.md, "Parts"). K = 1 unless a particle moved more than h / 2; at most self_collide_substeps
     // (then a part may move more).
     int parts = 1;
     if (most > 0.5f * h) {
-        const float relative = self_collide_relative_motion<Parallel>(out, xa, ya, za);
-        if (relative > 0.5f * h) parts = int(std::min(float(self_collide_substeps), std::ceil(relative / (0.5f * h))));
+        const float reach = std::min(most, self_collide_relative_motion<Parallel>(out, xa, ya, za));
+        if (reach > 0.5f * h) parts = int(std::min(float(self_collide_substeps), std::ceil(reach / (0.5f * h))));
     }
     if (parts > 1) { // the motion's end kept; the parts start where the motion does
         std::copy_n(out.x.data(), n, sc_end_x_.data());
