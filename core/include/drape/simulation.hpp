@@ -380,7 +380,8 @@ class Simulation {
     std::size_t self_collide_round(StateBuffer& out, const float* x0, const float* y0, const float* z0, bool& deep,
                                    bool probe);
     /// The largest displacement, over the motion from (xa, ya, za) to `out`, of one particle relative to another
-    /// of a patch whose swept box meets its own patch's (self_collide.cpp): the run's parts bound it by h.
+    /// of a patch whose swept box meets its own patch's (self_collide.cpp): the run's parts keep it, or every
+    /// particle's own motion (whichever needs fewer parts), under h / 2 a part.
     template <bool Parallel>
     float self_collide_relative_motion(const StateBuffer& out, const float* xa, const float* ya, const float* za);
     void cook_self_collision();
