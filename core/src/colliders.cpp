@@ -535,8 +535,14 @@ Contact project_point(const Collider& col, Vec3f p) noexcept {
 }
 
 bool is_inside(const Collider& col, Vec3f p, float slack) noexcept {
-    Collider c = col;
-    c.thickness = col.thickness - slack; // may go negative: a point on the surface is then outside
+    if (slack != 0.0f) { // a copy with the margin less the slack (it may go negative: a point on the surface is then
+                         // outside); without slack the collider itself (no copy: the implicit sweeps call this ~20
+                         // times a point in contact)
+        Collider c = col;
+        c.thickness = col.thickness - slack;
+        return is_inside(c, p, 0.0f);
+    }
+    const Collider& c = col;
     switch (col.kind) {
     case ColliderKind::plane:
         return inside_kind<ColliderKind::plane>(c, p[0], p[1], p[2]);
