@@ -233,8 +233,7 @@ float Simulation::self_collide_relative_motion(const StateBuffer& out, const flo
             const float* bp = sweep + 6 * p;
             for (std::size_t q = p + 1; q < patches; ++q) {
                 const float* bq = sweep + 6 * q;
-                if (bp[3] < bq[0] || bq[3] < bp[0] || bp[4] < bq[1] || bq[4] < bp[1] || bp[5] < bq[2] || bq[5] < bp[2])
-                    continue;
+                if (!boxes_meet(bp, bq)) continue;
                 r = std::max(r, pair(p, q));
             }
             relative[p] = r;
@@ -619,8 +618,7 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
     auto edge_edge = [&](std::uint32_t a, std::uint32_t b) -> std::size_t {
         if (pa.edges[a] > pa.edges[b]) std::swap(a, b);
         const float *be = edge_box + 6 * std::size_t(a), *bf = edge_box + 6 * std::size_t(b);
-        if (be[3] < bf[0] || bf[3] < be[0] || be[4] < bf[1] || bf[4] < be[1] || be[5] < bf[2] || bf[5] < be[2])
-            return 0;
+        if (!boxes_meet(be, bf)) return 0;
         const std::uint32_t *ev = edge + 2 * pa.edges[a], *fv = edge + 2 * pa.edges[b];
         if (fv[0] == ev[0] || fv[0] == ev[1] || fv[1] == ev[0] || fv[1] == ev[1]) return 0;
         if (w[ev[0]] == 0.0f && w[ev[1]] == 0.0f && w[fv[0]] == 0.0f && w[fv[1]] == 0.0f) return 0;
@@ -666,9 +664,6 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
     auto inside = [](const float* b, float px, float py, float pz) {
         return px >= b[0] && px <= b[3] && py >= b[1] && py <= b[4] && pz >= b[2] && pz <= b[5];
     };
-    auto overlap = [](const float* a, const float* b) {
-        return a[3] >= b[0] && b[3] >= a[0] && a[4] >= b[1] && b[4] >= a[1] && a[5] >= b[2] && b[5] >= a[2];
-    };
     auto patch_pair = [&](std::uint32_t p, std::uint32_t q) -> std::size_t {
         std::size_t found = 0;
         if (p == q) {
@@ -697,7 +692,7 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
             if (m == 0) continue;
             for (std::uint32_t s = pa.tri_start[b]; s < pa.tri_start[b + 1]; ++s) {
                 const float* tb = tri_box + 6 * std::size_t(s);
-                if (!overlap(tb, patch_box + 6 * a)) continue;
+                if (!boxes_meet(tb, patch_box + 6 * a)) continue;
                 for (std::size_t i = 0; i < m; ++i)
                     hit[i] = (c[0][i] >= tb[0]) & (c[0][i] <= tb[3]) & (c[1][i] >= tb[1]) & (c[1][i] <= tb[4]) &
                              (c[2][i] >= tb[2]) & (c[2][i] <= tb[5]);
@@ -708,14 +703,14 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
         std::size_t m = 0;
         for (std::uint32_t e = pa.edge_start[p]; e < pa.edge_start[p + 1]; ++e) {
             const float* eb = edge_box + 6 * std::size_t(e);
-            if (!overlap(eb, patch_box + 6 * q)) continue;
+            if (!boxes_meet(eb, patch_box + 6 * q)) continue;
             for (int k = 0; k < 6; ++k) c[k][m] = eb[k];
             id[m++] = e;
         }
         if (m == 0) return found;
         for (std::uint32_t f = pa.edge_start[q]; f < pa.edge_start[q + 1]; ++f) {
             const float* fb = edge_box + 6 * std::size_t(f);
-            if (!overlap(fb, patch_box + 6 * p)) continue;
+            if (!boxes_meet(fb, patch_box + 6 * p)) continue;
             for (std::size_t i = 0; i < m; ++i)
                 hit[i] = (c[3][i] >= fb[0]) & (fb[3] >= c[0][i]) & (c[4][i] >= fb[1]) & (fb[4] >= c[1][i]) &
                          (c[5][i] >= fb[2]) & (fb[5] >= c[2][i]);

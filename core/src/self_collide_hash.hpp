@@ -10,6 +10,11 @@
 
 namespace drape {
 
+/// Two boxes (6 floats each: lo x y z, hi x y z) meet (touching counts).
+inline bool boxes_meet(const float* a, const float* b) noexcept {
+    return a[3] >= b[0] && b[3] >= a[0] && a[4] >= b[1] && b[4] >= a[1] && a[5] >= b[2] && b[5] >= a[2];
+}
+
 /// Cubic cells as wide as the widest box, so that a box spans at most 2 cells an axis (8 buckets); each pair of
 /// overlapping boxes is reported once, in the bucket of the cell holding the low corner of their intersection.
 /// Filled by counting sort, serially (there are about 30 times fewer patches than particles); the bucket arrays are the
@@ -47,8 +52,7 @@ class PatchHash {
                 const std::uint32_t q = items_[k];
                 if (q <= p) continue;
                 const float* bq = box_ + 6 * std::size_t(q);
-                if (bp[3] < bq[0] || bq[3] < bp[0] || bp[4] < bq[1] || bq[4] < bp[1] || bp[5] < bq[2] || bq[5] < bp[2])
-                    continue;
+                if (!boxes_meet(bp, bq)) continue;
                 // The pair once: where the low corner of the two boxes' intersection lies (in p's cells and in q's,
                 // so q is in that cell's bucket).
                 if (bucket_of(cell_of(std::max(bp[0], bq[0])), cell_of(std::max(bp[1], bq[1])),
