@@ -170,6 +170,55 @@ TEST(Collider, EllipsoidClosestPointMatchesBruteForce) {
     EXPECT_NEAR(std::abs(x[1]), 0.1f, 1e-6f);
 }
 
+// segment_entry: spheres and ellipsoids by their quadratic, checked against a 60-halving bisection in double of the
+// same inside test, and the normal against the one projecting a point just inside gives.
+TEST(Collider, SegmentEntryIsTheFirstCrossing) {
+    const ColliderSurface s{0.004f, 0.3f};
+    const std::vector<Collider> round = {
+        make_sphere({0.1f, 0.2f, -0.1f}, 0.25f, s),
+        make_ellipsoid({0.0f, 0.1f, 0.0f}, {0.16f, 0.30f, 0.10f}, s),
+        make_ellipsoid({-0.2f, 0.0f, 0.3f}, {0.22f, 0.045f, 0.07f}, s, rotation_about_axis({1.0f, 2.0f, 0.5f}, 0.7f)),
+    };
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    for (const Collider& c : round) {
+        int checked = 0;
+        for (int k = 0; k < 200000 && checked < 300; ++k) {
+            const float reach = 0.3f; // p1 in the box around the collider, p0 a sweep's move or a long one away
+            const Vec3f p1{c.centre[0] + reach * u(rng), c.centre[1] + reach * u(rng), c.centre[2] + reach * u(rng)};
+            const float step = k % 2 ? 0.01f : 0.3f;
+            const Vec3f p0{p1[0] + step * u(rng), p1[1] + step * u(rng), p1[2] + step * u(rng)};
+            if (is_inside(c, p0) || !is_inside(c, p1)) continue;
+            ++checked;
+            const Contact e = segment_entry(c, p0, p1);
+            ASSERT_TRUE(e.inside);
+            double lo = 0.0, hi = 1.0;
+            for (int it = 0; it < 60; ++it) {
+                const double mid = 0.5 * (lo + hi);
+                const Vec3f q{static_cast<float>(p0[0] + mid * (double(p1[0]) - p0[0])),
+                              static_cast<float>(p0[1] + mid * (double(p1[1]) - p0[1])),
+                              static_cast<float>(p0[2] + mid * (double(p1[2]) - p0[2]))};
+                (is_inside(c, q) ? hi : lo) = mid;
+            }
+            for (int j = 0; j < 3; ++j)
+                EXPECT_NEAR(e.point[j], p0[j] + hi * (double(p1[j]) - p0[j]), 2e-6) << collider_kind_name(c.kind);
+            const Contact proj = project_point(c, {static_cast<float>(p0[0] + hi * (double(p1[0]) - p0[0])),
+                                                   static_cast<float>(p0[1] + hi * (double(p1[1]) - p0[1])),
+                                                   static_cast<float>(p0[2] + hi * (double(p1[2]) - p0[2]))});
+            if (!proj.inside) continue; // the bisection's last point rounded onto the surface
+            for (int j = 0; j < 3; ++j)
+                EXPECT_NEAR(e.normal[j], proj.normal[j], 1e-3) << collider_kind_name(c.kind);
+        }
+        EXPECT_EQ(checked, 300) << collider_kind_name(c.kind);
+    }
+    // Not entering (p0 inside as well): the projection of p1.
+    const Collider& c = round[0];
+    const Contact e = segment_entry(c, c.centre, {c.centre[0] + 0.01f, c.centre[1], c.centre[2]});
+    const Contact p = project_point(c, {c.centre[0] + 0.01f, c.centre[1], c.centre[2]});
+    EXPECT_EQ(e.point, p.point);
+    EXPECT_EQ(e.normal, p.normal);
+}
+
 TEST(Collider, VelocityResponseAndFriction) {
     const Collider frictionless = make_ground(0.0f, {0.01f, 0.0f});
     float x = 0.1f, y = -0.02f, z = 0.0f, vx = 2.0f, vy = -3.0f, vz = 0.5f, w = 1.0f;

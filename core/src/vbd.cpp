@@ -184,14 +184,7 @@ float contact_project(std::span<const Collider> colliders, const float p0[3], fl
             mu = c.friction;
             continue;
         }
-        float lo = 0.0f, hi = 1.0f; // p0 + lo (p - p0) outside, p0 + hi (p - p0) inside
-        for (int it = 0; it < 20; ++it) {
-            const float mid = 0.5f * (lo + hi);
-            const Vec3f q{p0[0] + mid * (p[0] - p0[0]), p0[1] + mid * (p[1] - p0[1]), p0[2] + mid * (p[2] - p0[2])};
-            (is_inside(c, q) ? hi : lo) = mid;
-        }
-        const Contact ct = project_point(c, {p0[0] + hi * (p[0] - p0[0]), p0[1] + hi * (p[1] - p0[1]),
-                                             p0[2] + hi * (p[2] - p0[2])});
+        const Contact ct = segment_entry(c, {p0[0], p0[1], p0[2]}, {p[0], p[1], p[2]});
         // Onto the tangent plane through the entry point.
         const float depth = (p[0] - ct.point[0]) * ct.normal[0] + (p[1] - ct.point[1]) * ct.normal[1] +
                             (p[2] - ct.point[2]) * ct.normal[2];

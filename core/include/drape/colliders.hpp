@@ -132,6 +132,14 @@ void collide_range(std::span<const Collider> colliders, float* x, float* y, floa
                    const float* hold_x = nullptr, const float* hold_y = nullptr,
                    const float* hold_z = nullptr) noexcept;
 
+/// Where the segment from `p0` (outside the collider) to `p1` (inside it) first enters it, and the outward unit normal
+/// there: the implicit solver's contact (vbd::contact_project) keeps a point on the tangent plane at that entry.
+/// Spheres and ellipsoids solve the quadratic |u0 + t (u1 - u0)|^2 = 1 in double (u: the point in the frame where the
+/// inflated surface is the unit sphere) and take the normal from the gradient there; planes, capsules and discs bisect
+/// the segment (20 halvings) and project the last inside point. With p0 not outside or p1 not inside, the result is
+/// the projection of p1.
+Contact segment_entry(const Collider& collider, Vec3f p0, Vec3f p1) noexcept;
+
 /// Whether a point is inside a collider (inside the solid or closer than thickness to it), with `slack` (m)
 /// taken off the margin to allow for float rounding of a projected point: what the tests check after
 /// collide_range.
