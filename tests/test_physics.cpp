@@ -15,7 +15,7 @@ namespace {
 Simulation oscillator(float k, float mass, float rest, float stretch, float dt, Integrator integ) {
     const std::array<SpringMaterial, spring_kind_count> mat{SpringMaterial{k, 0.0f}};
     Cloth cloth = cook_cloth(std::vector<float>{0.0f, 1.0f / mass}, {{0, 1, SpringKind::structural, rest}}, mat);
-    InitialState s{{0.0f, rest + stretch}, {0.0f, 0.0f}, {0.0f, 0.0f}, {0.0f, 0.0f}, {0.0f, 0.0f}, {0.0f, 0.0f}, {}, {}, {}, {}};
+    InitialState s{{0.0f, rest + stretch}, {0.0f, 0.0f}, {0.0f, 0.0f}, {0.0f, 0.0f}, {0.0f, 0.0f}, {0.0f, 0.0f}, {}, {}, {}, {}, {}};
     SimulationParams p;
     p.dt = dt;
     p.integrator = integ;

@@ -783,6 +783,30 @@ SceneState read_state(ObjectReader& st) {
             st.fail(st.at("self_collision_snapshot"), "has " + std::to_string(out.snapshot_x.size()) +
                                                           " entries; state.positions has " + std::to_string(out.x.size()));
     }
+    if (const json* planes = st.array("self_collision_planes", max_particles)) {
+        if (out.snapshot_x.empty())
+            st.fail(st.at("self_collision_planes"), "needs self_collision_snapshot (the planes belong to its run)");
+        SelfCollisionPlanes& pl = out.sc_planes;
+        for (std::size_t k = 0; k < planes->size(); ++k) {
+            const json& v = (*planes)[k];
+            const std::string at = st.at("self_collision_planes") + "[" + std::to_string(k) + "]";
+            if (!v.is_array() || v.size() != 5 || !v[0].is_number_unsigned() || v[0].get<std::uint64_t>() >= out.x.size() ||
+                (k > 0 && v[0].get<std::uint64_t>() <= pl.index.back()))
+                st.fail(at, "must be [particle, nx, ny, nz, c]: a particle index in [0, " + std::to_string(out.x.size()) +
+                                "), ascending, then four numbers");
+            double d[4];
+            for (int j = 0; j < 4; ++j) d[j] = v[j + 1].is_number() ? v[j + 1].get<double>() : std::nan("");
+            const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            if (!(std::fabs(len - 1.0) <= 1e-3))
+                st.fail(at, "must have a unit normal nx, ny, nz (its length is " + std::to_string(len) + ")");
+            if (!(std::fabs(d[3]) <= state_limit)) st.fail(at, "must have an offset c in [-1e+06, 1e+06] m");
+            pl.index.push_back(v[0].get<std::uint32_t>());
+            pl.nx.push_back(static_cast<float>(d[0]));
+            pl.ny.push_back(static_cast<float>(d[1]));
+            pl.nz.push_back(static_cast<float>(d[2]));
+            pl.c.push_back(static_cast<float>(d[3]));
+        }
+    }
     if (const json* sewn = st.array("seam_rest", max_particles))
         for (std::size_t k = 0; k < sewn->size(); ++k) {
             const json& v = (*sewn)[k];
@@ -1343,6 +1367,12 @@ void apply_state(const SceneState& st, BuiltScene& out) {
             out.initial.snapshot_y[i] = static_cast<float>(double(st.snapshot_y[i]) + shift[1]);
             out.initial.snapshot_z[i] = static_cast<float>(double(st.snapshot_z[i]) + shift[2]);
         }
+    out.initial.sc_planes = st.sc_planes;
+    if (shift != std::array<double, 3>{0.0, 0.0, 0.0}) {
+        SelfCollisionPlanes& pl = out.initial.sc_planes;
+        for (std::size_t k = 0; k < pl.index.size(); ++k)
+            pl.c[k] = static_cast<float>(double(pl.c[k]) + pl.nx[k] * shift[0] + pl.ny[k] * shift[1] + pl.nz[k] * shift[2]);
+    }
 }
 
 } // namespace

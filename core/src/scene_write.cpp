@@ -279,6 +279,14 @@ std::string state_json(const SceneState& st) {
                    num(st.snapshot_z[i]) + "]";
         out += "\n    ]";
     }
+    const SelfCollisionPlanes& pl = st.sc_planes;
+    if (!pl.index.empty()) {
+        out += ",\n    \"self_collision_planes\": [";
+        for (std::size_t k = 0; k < pl.index.size(); ++k)
+            out += std::string(k ? "," : "") + "\n      [" + std::to_string(pl.index[k]) + ", " + num(pl.nx[k]) + ", " +
+                   num(pl.ny[k]) + ", " + num(pl.nz[k]) + ", " + num(pl.c[k]) + "]";
+        out += "\n    ]";
+    }
     out += "\n  }";
     return out;
 }
@@ -391,6 +399,7 @@ SceneState capture_state(const Simulation& sim) {
     s.snapshot_x.assign(snap[0].begin(), snap[0].end());
     s.snapshot_y.assign(snap[1].begin(), snap[1].end());
     s.snapshot_z.assign(snap[2].begin(), snap[2].end());
+    s.sc_planes = sim.self_collision_planes();
     return s;
 }
 

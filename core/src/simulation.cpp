@@ -143,6 +143,17 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
         sc_snap_y_ = initial.snapshot_y;
         sc_snap_z_ = initial.snapshot_z;
         sc_snap_step_ = 0;
+        const SelfCollisionPlanes& pl = initial.sc_planes;
+        if (!pl.index.empty() && params_.solver != Solver::implicit) {
+            for (std::size_t k = 0; k < pl.index.size(); ++k) {
+                const std::uint32_t i = pl.index[k];
+                sc_push_x_[i] = pl.nx[k];
+                sc_push_y_[i] = pl.ny[k];
+                sc_push_z_[i] = pl.nz[k];
+                sc_plane_c_[i] = pl.c[k];
+            }
+            sc_plane_step_ = 0;
+        }
     }
 
     StateBuffer& s = buffers_[0];
@@ -207,6 +218,7 @@ void Simulation::set_params(const SimulationParams& params) {
     if (!params_.colliders.empty()) cook_triangle_contact();
     if (params_.self_collision.thickness > 0.0f) cook_self_collision();
     else sc_snap_step_ = SIZE_MAX; // off: the next time it is on, sides come from the start of that step again
+    sc_plane_step_ = SIZE_MAX; // the explicit planes belong to the parameters of their run
     if (params_.solver == Solver::implicit) cook_implicit();
     monitor_.init(cloth_, params_);
     rebaseline_ = true;
@@ -320,6 +332,21 @@ std::uint64_t Simulation::checksum() const noexcept {
         }
     }
     return h;
+}
+
+SelfCollisionPlanes Simulation::self_collision_planes() const {
+    SelfCollisionPlanes out;
+    if (self_collision_snapshot()[0].empty() || sc_plane_step_ != sc_snap_step_ || params_.solver == Solver::implicit)
+        return out;
+    for (std::size_t i = 0; i < cloth_.particle_count; ++i) {
+        if (sc_push_x_[i] == 0.0f && sc_push_y_[i] == 0.0f && sc_push_z_[i] == 0.0f) continue;
+        out.index.push_back(static_cast<std::uint32_t>(i));
+        out.nx.push_back(sc_push_x_[i]);
+        out.ny.push_back(sc_push_y_[i]);
+        out.nz.push_back(sc_push_z_[i]);
+        out.c.push_back(sc_plane_c_[i]);
+    }
+    return out;
 }
 
 } // namespace drape

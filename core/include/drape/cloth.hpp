@@ -110,6 +110,13 @@ struct Cloth {
 };
 
 /// Initial per-particle state (cold, plain vectors of particle_count entries).
+/// Self-collision's contact planes of its last run (explicit solver, Simulation::self_collision_planes): per particle
+/// pushed, its index, the unit normal along its push and the offset n . x (m, relative to Cloth::origin) it is held on.
+struct SelfCollisionPlanes {
+    std::vector<std::uint32_t> index;
+    std::vector<float> nx, ny, nz, c;
+};
+
 struct InitialState {
     std::vector<float> x, y, z;    ///< positions relative to Cloth::origin, m
     std::vector<float> vx, vy, vz; ///< velocities, m/s
@@ -119,6 +126,8 @@ struct InitialState {
     /// Self-collision's snapshot of its last run (positions after its pushes, relative to Cloth::origin): a saved
     /// state carries it so a resumed run continues as it would have; empty = none (the stage runs in the first step).
     std::vector<float> snapshot_x, snapshot_y, snapshot_z;
+    /// And its contact planes (explicit solver; only with a snapshot); empty = none.
+    SelfCollisionPlanes sc_planes;
 };
 
 /// Rounds n up to whole SIMD batches.

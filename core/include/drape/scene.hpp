@@ -101,6 +101,8 @@ struct SceneState {
     std::vector<float> seam_rest;
     /// Self-collision's snapshot of its last run ("self_collision_snapshot", InitialState::snapshot_x); empty = none.
     std::vector<float> snapshot_x, snapshot_y, snapshot_z;
+    /// And its contact planes ("self_collision_planes", InitialState::sc_planes); empty = none.
+    SelfCollisionPlanes sc_planes;
 };
 
 /// Everything a scene file holds (cold tier). Defaults are those of "hang".

@@ -191,6 +191,9 @@ class Simulation {
             return {};
         return {std::span<const float>(sc_snap_x_), std::span<const float>(sc_snap_y_), std::span<const float>(sc_snap_z_)};
     }
+    /// The contact planes the explicit solver holds the particles of the snapshot's run on (InitialState::sc_planes);
+    /// empty when there is no snapshot or that run pushed nothing.
+    SelfCollisionPlanes self_collision_planes() const;
 
     /// The frame's origin (world coordinates, m): positions, colliders and grab targets are relative to it
     /// (Cloth::origin).
@@ -413,12 +416,16 @@ class Simulation {
     // the start of the part (each pair's side).
     std::vector<float> sc_end_x_, sc_end_y_, sc_end_z_, sc_side_x_, sc_side_y_, sc_side_z_;
     std::size_t sc_parts_ = 0; ///< parts of the last run (self_collision_parts)
-    // Implicit solver, per particle: the sum of the pushes of a step's first run, then (at its end, normalised in place)
-    // the unit normal of its contact plane, with the offset n . x where the run left it, for the contact re-solve
-    // (implicit_step.cpp). Normal 0 0 0: none.
+    // Per particle: the sum of the pushes of a run (an implicit step's first, every explicit one), then (at its end,
+    // normalised in place) the unit normal of its contact plane, with the offset n . x where the run left it: for the
+    // implicit contact re-solve (implicit_step.cpp) or the explicit steps that skip the stage. Normal 0 0 0: none.
     std::vector<float> sc_push_x_, sc_push_y_, sc_push_z_, sc_plane_c_;
-    bool sc_track_pushes_ = false; ///< this run sums its pushes (an implicit step's first run)
+    bool sc_track_pushes_ = false; ///< this run sums its pushes (an implicit step's first run, every explicit run)
     bool sc_pushed_ = false; ///< the last run was an implicit step's first and pushed some particle (planes set)
+    /// Explicit solver: the planes (sc_push_*, sc_plane_c_) of the run that took the snapshot of step sc_plane_step_
+    /// hold the particles it pushed in the steps that skip the stage (SIZE_MAX: none).
+    std::size_t sc_plane_step_ = SIZE_MAX;
+    template <bool Parallel> void self_collide_hold(StateBuffer& out);
     std::size_t sc_snap_step_ = SIZE_MAX; ///< steps_done_ after the step the snapshot was taken in (SIZE_MAX: none)
     std::size_t sc_runs_ = 0;             ///< steps in which the stage ran (self_collision_runs)
     std::size_t sc_resolves_ = 0;         ///< implicit contact re-solves (self_collision_resolves)
