@@ -144,6 +144,13 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
         sc_snap_z_ = initial.snapshot_z;
         sc_snap_step_ = 0;
         const SelfCollisionPlanes& pl = initial.sc_planes;
+        const std::size_t m = pl.index.size();
+        if (pl.nx.size() != m || pl.ny.size() != m || pl.nz.size() != m || pl.c.size() != m)
+            throw InvalidInput("initial.sc_planes: " + std::to_string(m) + " indices but normals and offsets of other lengths");
+        for (std::uint32_t i : pl.index)
+            if (i >= n)
+                throw InvalidInput("initial.sc_planes: particle " + std::to_string(i) + " is not in [0, " +
+                                   std::to_string(n) + ")");
         if (!pl.index.empty() && params_.solver != Solver::implicit) {
             for (std::size_t k = 0; k < pl.index.size(); ++k) {
                 const std::uint32_t i = pl.index[k];
