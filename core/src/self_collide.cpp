@@ -802,11 +802,12 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
 // chattered at 1-5 m/s (N = 100, 1.5 s after the fold), which in turn kept the stage running every 4 to 14 steps.
 template <bool Parallel> void Simulation::self_collide_hold(StateBuffer& out) {
     const float mu = params_.self_collision.friction;
+    const float* w = cloth_.inv_mass.data(); // a particle pinned (or grabbed) since the run stays where it is held
     // With Verlet u, v, w hold displacements (x - x_prev): the same rule removes their part into the plane.
     for_blocks<Parallel>(cloth_.particle_count, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) {
             const float nx = sc_push_x_[i], ny = sc_push_y_[i], nz = sc_push_z_[i];
-            if (nx == 0.0f && ny == 0.0f && nz == 0.0f) continue;
+            if ((nx == 0.0f && ny == 0.0f && nz == 0.0f) || w[i] == 0.0f) continue;
             const float gap = sc_plane_c_[i] - (nx * out.x[i] + ny * out.y[i] + nz * out.z[i]);
             if (!(gap > 0.0f)) continue;
             out.x[i] += gap * nx;
