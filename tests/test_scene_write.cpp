@@ -339,16 +339,36 @@ TEST(SceneWrite, SelfCollisionSnapshotIsSavedAndResumed) {
     BuiltScene b = build_scene(spec);
     Simulation original(std::move(b.cloth), b.initial, b.params);
     original.step(300);
-    // A state saved right before a step in which the stage skips (the pile is still moving: most steps run it).
+    // A state saved right before a step in which the stage skips (the pile is still moving: most steps run it), and
+    // in which the planes of its last run hold some particle.
     SceneState state;
     for (int k = 0; k < 200; ++k) {
         state = capture_state(original);
         const std::size_t runs = original.self_collision_runs();
         original.step(1);
-        if (original.self_collision_runs() == runs) break;
+        if (original.self_collision_runs() == runs && !state.sc_planes.index.empty()) break;
         state = SceneState{};
     }
     ASSERT_EQ(state.snapshot_x.size(), original.cloth().particle_count) << "a skipping step, after the stage has run";
+    const std::uint64_t after_one = original.checksum();
+    original.step(199);
+    const std::uint64_t after_200 = original.checksum();
+    {
+        spec.state = state;
+        BuiltScene r = build_scene(parse_scene(scene_to_json(spec, &state), "resume.json")); // through the file format
+        Simulation resumed(std::move(r.cloth), r.initial, r.params);
+        resumed.step(1);
+        EXPECT_EQ(resumed.checksum(), after_one) << "the planes held the same particles";
+        resumed.step(199);
+        EXPECT_EQ(resumed.checksum(), after_200);
+        SceneState no_planes = state;
+        no_planes.sc_planes = {};
+        spec.state = no_planes;
+        BuiltScene q = build_scene(spec);
+        Simulation unheld(std::move(q.cloth), q.initial, q.params);
+        unheld.step(1);
+        EXPECT_NE(unheld.checksum(), after_one) << "without its planes the skipping step holds nothing";
+    }
     state.snapshot_x.clear();
     state.snapshot_y.clear();
     state.snapshot_z.clear();
@@ -439,17 +459,21 @@ TEST(SceneWrite, StateErrorsAreClear) {
     // Self-collision's planes: only with a snapshot, a particle index in range and ascending, a unit normal.
     const std::string snap = R"(, "self_collision_snapshot": [[0,0,0],[1,0,0],[0,0,1],[1,0,1]])";
     const std::string pre = "{" + four + ", " + ok_vel + R"(, "pinned": [])";
-    EXPECT_EQ(error(pre + snap + R"(, "self_collision_planes": [[1, 0, 1, 0, 0.5], [3, 0, -1, 0, 0]]})"), "");
-    e = error(pre + R"(, "self_collision_planes": [[1, 0, 1, 0, 0.5]]})");
+    EXPECT_EQ(error(pre + snap + R"(, "self_collision_planes": [[1, 0, 0, 1, 0, 0], [3, 2, 0, -1, 0, 0]]})"), "");
+    e = error(pre + R"(, "self_collision_planes": [[1, 0, 0, 1, 0, 0]]})");
     EXPECT_TRUE(has(e, "state.self_collision_planes") && has(e, "needs self_collision_snapshot")) << e;
-    e = error(pre + snap + R"(, "self_collision_planes": [[4, 0, 1, 0, 0.5]]})");
+    e = error(pre + snap + R"(, "self_collision_planes": [[4, 0, 0, 1, 0, 0]]})");
     EXPECT_TRUE(has(e, "state.self_collision_planes[0]") && has(e, "[0, 4)")) << e;
-    e = error(pre + snap + R"(, "self_collision_planes": [[2, 0, 1, 0, 0], [1, 0, 1, 0, 0]]})");
+    e = error(pre + snap + R"(, "self_collision_planes": [[2, 0, 0, 1, 0, 0], [1, 0, 0, 1, 0, 0]]})");
     EXPECT_TRUE(has(e, "state.self_collision_planes[1]") && has(e, "ascending")) << e;
-    e = error(pre + snap + R"(, "self_collision_planes": [[1, 0, 2, 0, 0.5]]})");
+    e = error(pre + snap + R"(, "self_collision_planes": [[1, 0, 0, 2, 0, 0]]})");
     EXPECT_TRUE(has(e, "state.self_collision_planes[0]") && has(e, "unit normal")) << e;
-    e = error(pre + snap + R"(, "self_collision_planes": [[1, 0, 1, 0]]})");
-    EXPECT_TRUE(has(e, "state.self_collision_planes[0]") && has(e, "[particle, nx, ny, nz, c]")) << e;
+    e = error(pre + snap + R"(, "self_collision_planes": [[1, 0, 1, 0, 0]]})");
+    EXPECT_TRUE(has(e, "state.self_collision_planes[0]") && has(e, "[particle, partner, nx, ny, nz, c]")) << e;
+    e = error(pre + snap + R"(, "self_collision_planes": [[1, 9, 0, 1, 0, 0]]})");
+    EXPECT_TRUE(has(e, "state.self_collision_planes[0]") && has(e, "[0, 4)")) << e;
+    e = error(pre + snap + R"(, "self_collision_planes": [[1, 0, 0, 1, 0, 0.5]]})");
+    EXPECT_TRUE(has(e, "state.self_collision_planes[0]") && has(e, "within 1 mm")) << e;
 }
 
 TEST(SceneWrite, SaveIsAtomicAndFailuresNameThePath) {

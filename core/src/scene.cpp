@@ -790,17 +790,24 @@ SceneState read_state(ObjectReader& st) {
         for (std::size_t k = 0; k < planes->size(); ++k) {
             const json& v = (*planes)[k];
             const std::string at = st.at("self_collision_planes") + "[" + std::to_string(k) + "]";
-            if (!v.is_array() || v.size() != 5 || !v[0].is_number_unsigned() || v[0].get<std::uint64_t>() >= out.x.size() ||
-                (k > 0 && v[0].get<std::uint64_t>() <= pl.index.back()))
-                st.fail(at, "must be [particle, nx, ny, nz, c]: a particle index in [0, " + std::to_string(out.x.size()) +
-                                "), ascending, then four numbers");
+            if (!v.is_array() || v.size() != 6 || !v[0].is_number_unsigned() || v[0].get<std::uint64_t>() >= out.x.size() ||
+                (k > 0 && v[0].get<std::uint64_t>() <= pl.index.back()) || !v[1].is_number_unsigned() ||
+                v[1].get<std::uint64_t>() >= out.x.size())
+                st.fail(at, "must be [particle, partner, nx, ny, nz, c]: particle indices in [0, " +
+                                std::to_string(out.x.size()) + ") (the first ascending), then four numbers");
             double d[4];
-            for (int j = 0; j < 4; ++j) d[j] = v[j + 1].is_number() ? v[j + 1].get<double>() : std::nan("");
+            for (int j = 0; j < 4; ++j) d[j] = v[j + 2].is_number() ? v[j + 2].get<double>() : std::nan("");
             const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             if (!(std::fabs(len - 1.0) <= 1e-3))
                 st.fail(at, "must have a unit normal nx, ny, nz (its length is " + std::to_string(len) + ")");
-            if (!(std::fabs(d[3]) <= state_limit)) st.fail(at, "must have an offset c in [-1e+06, 1e+06] m");
-            pl.index.push_back(v[0].get<std::uint32_t>());
+            const std::uint32_t i = v[0].get<std::uint32_t>();
+            // The plane goes through where the run left the particle: the snapshot, up to rounding.
+            const double on = d[0] * out.snapshot_x[i] + d[1] * out.snapshot_y[i] + d[2] * out.snapshot_z[i];
+            if (!(std::fabs(d[3] - on) <= 1e-3))
+                st.fail(at, "must have an offset c within 1 mm of n . self_collision_snapshot[" + std::to_string(i) +
+                                "] (" + std::to_string(on) + " m)");
+            pl.index.push_back(i);
+            pl.partner.push_back(v[1].get<std::uint32_t>());
             pl.nx.push_back(static_cast<float>(d[0]));
             pl.ny.push_back(static_cast<float>(d[1]));
             pl.nz.push_back(static_cast<float>(d[2]));

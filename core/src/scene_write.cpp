@@ -283,7 +283,8 @@ std::string state_json(const SceneState& st) {
     if (!pl.index.empty()) {
         out += ",\n    \"self_collision_planes\": [";
         for (std::size_t k = 0; k < pl.index.size(); ++k)
-            out += std::string(k ? "," : "") + "\n      [" + std::to_string(pl.index[k]) + ", " + num(pl.nx[k]) + ", " +
+            out += std::string(k ? "," : "") + "\n      [" + std::to_string(pl.index[k]) + ", " +
+                   std::to_string(pl.partner[k]) + ", " + num(pl.nx[k]) + ", " +
                    num(pl.ny[k]) + ", " + num(pl.nz[k]) + ", " + num(pl.c[k]) + "]";
         out += "\n    ]";
     }

@@ -147,6 +147,7 @@ void Simulation::cook_self_collision() {
                                       &sc_side_x_, &sc_side_y_, &sc_side_z_, &sc_push_x_, &sc_push_y_,
                                       &sc_push_z_, &sc_plane_c_})
             a->assign(n, 0.0f);
+        sc_partner_.assign(n, UINT32_MAX);
         sc_block_moved_.assign((n + sc_block - 1) / sc_block, 0.0f);
         sc_snap_step_ = SIZE_MAX;
     }
@@ -294,6 +295,7 @@ template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out, b
         std::fill(sc_push_x_.data() + begin, sc_push_x_.data() + end, 0.0f);
         std::fill(sc_push_y_.data() + begin, sc_push_y_.data() + end, 0.0f);
         std::fill(sc_push_z_.data() + begin, sc_push_z_.data() + end, 0.0f);
+        if (explicit_solver) std::fill(sc_partner_.data() + begin, sc_partner_.data() + end, UINT32_MAX);
     });
     // Sub-steps: the motion from there to here, cut into K equal parts, so that no pair closes by more than h within
     // one and a pair that crosses is still within h of the other side at its end, with its side from the part's start
@@ -397,6 +399,7 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
     const float h = params_.self_collision.thickness;
     const double hd = h, mu = params_.self_collision.friction;
     const bool verlet = params_.integrator == Integrator::verlet;
+    const bool partners = sc_track_pushes_ && params_.solver != Solver::implicit; // for self_collide_hold
     const float dt = params_.dt, inv_dt = 1.0f / params_.dt;
     const std::uint32_t* tri = cloth_.triangles.data();
     const std::uint32_t* edge = sc_edges_.data();
@@ -585,6 +588,19 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
             dv = -vn * nrm - cut * vt;
         }
         deposit(v, coef, count, push, dv);
+        if (partners) // each pushed vertex: the other side's vertex of largest weight (the first of equals)
+            for (int k = 0; k < count; ++k) {
+                if (coef[k] == 0.0) continue;
+                int best = -1;
+                for (int j = 0; j < count; ++j)
+                    if ((alpha[j] > 0.0) != (alpha[k] > 0.0) && (best < 0 || std::abs(alpha[j]) > std::abs(alpha[best])))
+                        best = j;
+                if (best < 0) continue;
+                std::atomic_ref<std::uint32_t> slot(sc_partner_[v[k]]); // the lowest: the same in any order
+                std::uint32_t cur = slot.load(std::memory_order_relaxed);
+                while (v[best] < cur && !slot.compare_exchange_weak(cur, v[best], std::memory_order_relaxed)) {
+                }
+            }
         return true;
     };
 
@@ -795,34 +811,65 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
 }
 
 // Explicit steps that skip the stage: a particle the last run pushed stays on the far side of its plane (the unit
-// normal along its push, through where that run and the collide pass left it), and loses the velocity into it, with
-// Coulomb friction (self_collision.friction) on the rest like a contact of the run. Without this, a particle pressed
+// normal along its push, through where that run and the collide pass left it, carried along the normal by its
+// partner's move since), and loses the velocity into it relative to the partner's, with Coulomb friction
+// (self_collision.friction) on the rest like a contact of the run. A plane fixed in space braked layers that move
+// together: the top of a falling fold lost its fall at every skipping step. Without this, a particle pressed
 // into a contact (a folded cloth's edge, a layer's weight) met it only when the stage next ran, a quarter of the
 // thickness of motion later: in between it accelerated into it and was then pushed back, and a resting fold's corners
 // chattered at 1-5 m/s (N = 100, 1.5 s after the fold), which in turn kept the stage running every 4 to 14 steps.
 template <bool Parallel> void Simulation::self_collide_hold(StateBuffer& out) {
     const float mu = params_.self_collision.friction;
     const float* w = cloth_.inv_mass.data(); // a particle pinned (or grabbed) since the run stays where it is held
-    // With Verlet u, v, w hold displacements (x - x_prev): the same rule removes their part into the plane.
-    for_blocks<Parallel>(cloth_.particle_count, [&](std::size_t begin, std::size_t end) {
+    const std::size_t n = cloth_.particle_count;
+    // First every plane where its partner has carried it (the partner's move since the snapshot, along the normal) and
+    // the partner's velocity, read before any particle is moved (so the result does not depend on the order).
+    float* c = sc_side_x_.data();
+    float *pu = sc_end_x_.data(), *pv = sc_end_y_.data(), *pw = sc_end_z_.data();
+    for_blocks<Parallel>(n, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            const float nx = sc_push_x_[i], ny = sc_push_y_[i], nz = sc_push_z_[i];
+            if (nx == 0.0f && ny == 0.0f && nz == 0.0f) continue;
+            const std::uint32_t q = sc_partner_[i];
+            if (q == UINT32_MAX) {
+                c[i] = sc_plane_c_[i], pu[i] = pv[i] = pw[i] = 0.0f;
+                continue;
+            }
+            c[i] = sc_plane_c_[i] + nx * (out.x[q] - sc_snap_x_[q]) + ny * (out.y[q] - sc_snap_y_[q]) +
+                   nz * (out.z[q] - sc_snap_z_[q]);
+            pu[i] = out.u[q], pv[i] = out.v[q], pw[i] = out.w[q];
+        }
+    });
+    float* held = sc_block_moved_.data(); // per block: 1 when it put a particle back (the move test is done with it)
+    // Then each particle behind its plane back onto it, without the velocity into it relative to the partner's, and
+    // Coulomb friction on the relative tangential velocity. With Verlet u, v, w hold displacements (x - x_prev): the
+    // same rule applies to them.
+    for_blocks<Parallel>(n, [&](std::size_t begin, std::size_t end) {
+        held[begin / sc_block] = 0.0f;
         for (std::size_t i = begin; i < end; ++i) {
             const float nx = sc_push_x_[i], ny = sc_push_y_[i], nz = sc_push_z_[i];
             if ((nx == 0.0f && ny == 0.0f && nz == 0.0f) || w[i] == 0.0f) continue;
-            const float gap = sc_plane_c_[i] - (nx * out.x[i] + ny * out.y[i] + nz * out.z[i]);
+            const float gap = c[i] - (nx * out.x[i] + ny * out.y[i] + nz * out.z[i]);
             if (!(gap > 0.0f)) continue;
+            held[begin / sc_block] = 1.0f;
             out.x[i] += gap * nx;
             out.y[i] += gap * ny;
             out.z[i] += gap * nz;
-            const float vn = out.u[i] * nx + out.v[i] * ny + out.w[i] * nz;
+            const float ru = out.u[i] - pu[i], rv = out.v[i] - pv[i], rw = out.w[i] - pw[i];
+            const float vn = ru * nx + rv * ny + rw * nz;
             if (!(vn < 0.0f)) continue;
-            float tx = out.u[i] - vn * nx, ty = out.v[i] - vn * ny, tz = out.w[i] - vn * nz;
+            const float tx = ru - vn * nx, ty = rv - vn * ny, tz = rw - vn * nz;
             const float vt = std::sqrt(tx * tx + ty * ty + tz * tz);
             const float keep = vt > 0.0f ? std::max(0.0f, 1.0f - mu * -vn / vt) : 0.0f;
-            out.u[i] = keep * tx;
-            out.v[i] = keep * ty;
-            out.w[i] = keep * tz;
+            out.u[i] = pu[i] + keep * tx;
+            out.v[i] = pv[i] + keep * ty;
+            out.w[i] = pw[i] + keep * tz;
         }
     });
+    // A plane tilted from a collider's surface can hold a particle sliding along it a little inside its margin: the
+    // collide stage's particle pass has the last word, as after a run.
+    if (!params_.colliders.empty() && *std::max_element(sc_block_moved_.begin(), sc_block_moved_.end()) > 0.0f)
+        collide_stage<Parallel>(out, true, 0);
 }
 
 template void Simulation::self_collide_hold<true>(StateBuffer&);

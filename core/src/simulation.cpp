@@ -145,12 +145,12 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
         sc_snap_step_ = 0;
         const SelfCollisionPlanes& pl = initial.sc_planes;
         const std::size_t m = pl.index.size();
-        if (pl.nx.size() != m || pl.ny.size() != m || pl.nz.size() != m || pl.c.size() != m)
+        if (pl.partner.size() != m || pl.nx.size() != m || pl.ny.size() != m || pl.nz.size() != m || pl.c.size() != m)
             throw InvalidInput("initial.sc_planes: " + std::to_string(m) + " indices but normals and offsets of other lengths");
-        for (std::uint32_t i : pl.index)
-            if (i >= n)
-                throw InvalidInput("initial.sc_planes: particle " + std::to_string(i) + " is not in [0, " +
-                                   std::to_string(n) + ")");
+        for (std::size_t k = 0; k < m; ++k)
+            if (pl.index[k] >= n || pl.partner[k] >= n)
+                throw InvalidInput("initial.sc_planes: particle " + std::to_string(pl.index[k]) + " or partner " +
+                                   std::to_string(pl.partner[k]) + " is not in [0, " + std::to_string(n) + ")");
         if (!pl.index.empty() && params_.solver != Solver::implicit) {
             for (std::size_t k = 0; k < pl.index.size(); ++k) {
                 const std::uint32_t i = pl.index[k];
@@ -158,6 +158,7 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
                 sc_push_y_[i] = pl.ny[k];
                 sc_push_z_[i] = pl.nz[k];
                 sc_plane_c_[i] = pl.c[k];
+                sc_partner_[i] = pl.partner[k];
             }
             sc_plane_step_ = 0;
         }
@@ -348,6 +349,7 @@ SelfCollisionPlanes Simulation::self_collision_planes() const {
     for (std::size_t i = 0; i < cloth_.particle_count; ++i) {
         if (sc_push_x_[i] == 0.0f && sc_push_y_[i] == 0.0f && sc_push_z_[i] == 0.0f) continue;
         out.index.push_back(static_cast<std::uint32_t>(i));
+        out.partner.push_back(sc_partner_[i]);
         out.nx.push_back(sc_push_x_[i]);
         out.ny.push_back(sc_push_y_[i]);
         out.nz.push_back(sc_push_z_[i]);

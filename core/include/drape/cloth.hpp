@@ -109,14 +109,14 @@ struct Cloth {
     std::size_t spring_count() const noexcept { return edges.size(); }
 };
 
-/// Initial per-particle state (cold, plain vectors of particle_count entries).
 /// Self-collision's contact planes of its last run (explicit solver, Simulation::self_collision_planes): per particle
 /// pushed, its index, the unit normal along its push and the offset n . x (m, relative to Cloth::origin) it is held on.
 struct SelfCollisionPlanes {
-    std::vector<std::uint32_t> index;
+    std::vector<std::uint32_t> index, partner; ///< the particle; its contacts' partner, whose move carries the plane
     std::vector<float> nx, ny, nz, c;
 };
 
+/// Initial per-particle state (cold, plain vectors of particle_count entries).
 struct InitialState {
     std::vector<float> x, y, z;    ///< positions relative to Cloth::origin, m
     std::vector<float> vx, vy, vz; ///< velocities, m/s

@@ -425,6 +425,10 @@ class Simulation {
     /// Explicit solver: the planes (sc_push_*, sc_plane_c_) of the run that took the snapshot of step sc_plane_step_
     /// hold the particles it pushed in the steps that skip the stage (SIZE_MAX: none).
     std::size_t sc_plane_step_ = SIZE_MAX;
+    /// Explicit solver, per particle pushed by the run: a partner of its contacts (of the pair's other side, the
+    /// vertex with the largest weight; over several contacts the lowest index), whose move since the snapshot moves the
+    /// plane with it. UINT32_MAX: none.
+    std::vector<std::uint32_t> sc_partner_;
     template <bool Parallel> void self_collide_hold(StateBuffer& out);
     std::size_t sc_snap_step_ = SIZE_MAX; ///< steps_done_ after the step the snapshot was taken in (SIZE_MAX: none)
     std::size_t sc_runs_ = 0;             ///< steps in which the stage ran (self_collision_runs)
