@@ -460,20 +460,26 @@ TEST(SceneWrite, StateErrorsAreClear) {
     const std::string snap = R"(, "self_collision_snapshot": [[0,0,0],[1,0,0],[0,0,1],[1,0,1]])";
     const std::string pre = "{" + four + ", " + ok_vel + R"(, "pinned": [])";
     EXPECT_EQ(error(pre + snap + R"(, "self_collision_planes": [[1, 0, 0, 1, 0, 0], [3, 2, 0, -1, 0, 0]]})"), "");
-    e = error(pre + R"(, "self_collision_planes": [[1, 0, 0, 1, 0, 0]]})");
-    EXPECT_TRUE(has(e, "state.self_collision_planes") && has(e, "needs self_collision_snapshot")) << e;
-    e = error(pre + snap + R"(, "self_collision_planes": [[4, 0, 0, 1, 0, 0]]})");
-    EXPECT_TRUE(has(e, "state.self_collision_planes[0]") && has(e, "[0, 4)")) << e;
-    e = error(pre + snap + R"(, "self_collision_planes": [[2, 0, 0, 1, 0, 0], [1, 0, 0, 1, 0, 0]]})");
-    EXPECT_TRUE(has(e, "state.self_collision_planes[1]") && has(e, "ascending")) << e;
-    e = error(pre + snap + R"(, "self_collision_planes": [[1, 0, 0, 2, 0, 0]]})");
-    EXPECT_TRUE(has(e, "state.self_collision_planes[0]") && has(e, "unit normal")) << e;
-    e = error(pre + snap + R"(, "self_collision_planes": [[1, 0, 1, 0, 0]]})");
-    EXPECT_TRUE(has(e, "state.self_collision_planes[0]") && has(e, "[particle, partner, nx, ny, nz, c]")) << e;
-    e = error(pre + snap + R"(, "self_collision_planes": [[1, 9, 0, 1, 0, 0]]})");
-    EXPECT_TRUE(has(e, "state.self_collision_planes[0]") && has(e, "[0, 4)")) << e;
-    e = error(pre + snap + R"(, "self_collision_planes": [[1, 0, 0, 1, 0, 0.5]]})");
-    EXPECT_TRUE(has(e, "state.self_collision_planes[0]") && has(e, "within 1 mm")) << e;
+    const struct {
+        std::string state, where, what;
+    } bad[] = {
+        {pre + R"(, "self_collision_planes": [[1, 0, 0, 1, 0, 0]]})", "state.self_collision_planes",
+         "needs self_collision_snapshot"},
+        {pre + snap + R"(, "self_collision_planes": [[4, 0, 0, 1, 0, 0]]})", "state.self_collision_planes[0]", "[0, 4)"},
+        {pre + snap + R"(, "self_collision_planes": [[2, 0, 0, 1, 0, 0], [1, 0, 0, 1, 0, 0]]})",
+         "state.self_collision_planes[1]", "ascending"},
+        {pre + snap + R"(, "self_collision_planes": [[1, 0, 0, 2, 0, 0]]})", "state.self_collision_planes[0]",
+         "unit normal"},
+        {pre + snap + R"(, "self_collision_planes": [[1, 0, 1, 0, 0]]})", "state.self_collision_planes[0]",
+         "[particle, partner, nx, ny, nz, c]"},
+        {pre + snap + R"(, "self_collision_planes": [[1, 9, 0, 1, 0, 0]]})", "state.self_collision_planes[0]", "[0, 4)"},
+        {pre + snap + R"(, "self_collision_planes": [[1, 0, 0, 1, 0, 0.5]]})", "state.self_collision_planes[0]",
+         "within 1 mm"},
+    };
+    for (const auto& b : bad) {
+        e = error(b.state);
+        EXPECT_TRUE(has(e, b.where) && has(e, b.what)) << e;
+    }
 }
 
 TEST(SceneWrite, SaveIsAtomicAndFailuresNameThePath) {

@@ -556,13 +556,13 @@ Contact segment_entry(const Collider& c, Vec3f p0, Vec3f p1) noexcept {
     double A[3], u0[3], du[3];
     for (int k = 0; k < 3; ++k)
         A[k] = double(sphere ? c.size[0] : c.size[k]) + c.thickness;
-    const auto& R = c.rotation;
+    static constexpr std::array<float, 9> identity{1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f, 0.0f, 1.0f};
+    const auto& R = sphere ? identity : c.rotation;
     for (int k = 0; k < 3; ++k) {
         double a = 0.0, b = 0.0;
         for (int j = 0; j < 3; ++j) {
-            const double r = sphere ? (j == k ? 1.0 : 0.0) : R[3 * j + k];
-            a += r * (double(p0[j]) - c.centre[j]);
-            b += r * (double(p1[j]) - c.centre[j]);
+            a += R[3 * j + k] * (double(p0[j]) - c.centre[j]);
+            b += R[3 * j + k] * (double(p1[j]) - c.centre[j]);
         }
         u0[k] = a / A[k];
         du[k] = b / A[k] - u0[k];
@@ -586,7 +586,7 @@ Contact segment_entry(const Collider& c, Vec3f p0, Vec3f p1) noexcept {
         out.point[k] = static_cast<float>(double(p0[k]) + t * (double(p1[k]) - p0[k]));
         double w = 0.0;
         for (int j = 0; j < 3; ++j)
-            w += (sphere ? (k == j ? 1.0 : 0.0) : R[3 * k + j]) * n[j];
+            w += R[3 * k + j] * n[j];
         out.normal[k] = static_cast<float>(w / len);
     }
     return out;
