@@ -28,13 +28,13 @@ if display_works; then
     exec "$drape" view "$@"
 fi
 
-if ! command -v xvfb-run >/dev/null 2>&1; then
-    echo "run_viewer: no display and no xvfb-run; install it with scripts/setup.sh (Debian package xvfb)" >&2
+if ! command -v Xvfb >/dev/null 2>&1; then
+    echo "run_viewer: no display and no Xvfb; install it with scripts/setup.sh (Debian package xvfb)" >&2
     exit 2
 fi
 shot=${DRAPE_SCREENSHOT:-drape_viewer.png}
 frames=${DRAPE_FRAMES:-300}
 echo "run_viewer: no display; running $frames frames under Xvfb + Mesa llvmpipe (software OpenGL 4.5)" >&2
-xvfb-run -a -s "-screen 0 1600x1000x24" "$drape" view --frames "$frames" --screenshot "$shot" --stats-json \
+"$root/scripts/with_xvfb.sh" -s "-screen 0 1600x1000x24" "$drape" view --frames "$frames" --screenshot "$shot" --stats-json \
     --no-vsync "$@"
 echo "run_viewer: screenshot saved to $shot" >&2

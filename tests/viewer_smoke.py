@@ -92,7 +92,7 @@ def luminance(r, g, b):
 
 
 def drive_input(drape):
-    """Runs inside xvfb-run (DISPLAY set): the viewer, driven by xdotool. Returns 0 or 1."""
+    """Runs inside scripts/with_xvfb.sh (DISPLAY set): the viewer, driven by xdotool. Returns 0 or 1."""
     def xdo(*args):
         subprocess.run(["xdotool"] + [str(a) for a in args], check=True, timeout=30)
 
@@ -191,7 +191,7 @@ def main():
     ap.add_argument("--drape", required=True)
     ap.add_argument("--frames", type=int, default=30)
     ap.add_argument("--keep", help="copy the screenshot here")
-    ap.add_argument("--drive", action="store_true", help=argparse.SUPPRESS)  # inner run under xvfb-run
+    ap.add_argument("--drive", action="store_true", help=argparse.SUPPRESS)  # inner run under with_xvfb.sh
     args = ap.parse_args()
     if args.drive:
         return drive_input(args.drape)
@@ -216,13 +216,15 @@ def main():
             return 1
         print(f"ok: drape view {' '.join(args_)} -> {lines[0]}")
 
-    xvfb = shutil.which("xvfb-run")
-    if not xvfb:
-        print("FAIL: xvfb-run not found; scripts/setup.sh installs xvfb (Debian package 'xvfb')")
+    # A private Xvfb per run: scripts/with_xvfb.sh returns the command's own exit code (xvfb-run exits 5 with a line
+    # of its own when it cannot remove its temporary directory, which once failed this check under CI's load).
+    xvfb = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts", "with_xvfb.sh")
+    if not shutil.which("Xvfb"):
+        print("FAIL: Xvfb not found; scripts/setup.sh installs xvfb (Debian package 'xvfb')")
         return 1
     tmp = tempfile.mkdtemp(prefix="drape_smoke_")
     shot = os.path.join(tmp, "viewer.png")
-    cmd = [xvfb, "-a", "-s", "-screen 0 1600x1000x24", args.drape, "view", "--frames", str(args.frames),
+    cmd = [xvfb, "-s", "-screen 0 1600x1000x24", args.drape, "view", "--frames", str(args.frames),
            "--screenshot", shot, "--stats-json", "--no-vsync"]
     print("running:", " ".join(cmd))
     # Under AddressSanitizer (scripts/test.sh's asan stage) leak checking is off for the windowed run only: Mesa's
@@ -303,7 +305,7 @@ def main():
 
     # The implicit solver, with every panel open (the solver's controls drawn): one step per frame, its iterations
     # and residual in the stats.
-    cmd = [xvfb, "-a", "-s", "-screen 0 1600x1000x24", args.drape, "view", "--frames", "20", "--solver", "implicit",
+    cmd = [xvfb, "-s", "-screen 0 1600x1000x24", args.drape, "view", "--frames", "20", "--solver", "implicit",
            "--iterations", "20", "--panels-open", "--stats-json", "--no-vsync"]
     print("running:", " ".join(cmd))
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
@@ -333,7 +335,7 @@ def main():
     if not shutil.which("xdotool"):
         print("FAIL: xdotool not found; scripts/setup.sh installs it (Debian package 'xdotool')")
         return 1
-    cmd = [xvfb, "-a", "-s", "-screen 0 1600x1000x24", sys.executable, os.path.abspath(__file__), "--drape",
+    cmd = [xvfb, "-s", "-screen 0 1600x1000x24", sys.executable, os.path.abspath(__file__), "--drape",
            os.path.abspath(args.drape), "--drive"]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=240, env=env)
     sys.stdout.write(proc.stdout)

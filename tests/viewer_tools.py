@@ -27,7 +27,9 @@ import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from viewer_smoke import read_png, is_cloth  # noqa: E402  (the same PNG decoder and cloth colours)
 
-XVFB = ["xvfb-run", "-a", "-s", "-screen 0 1600x1000x24"]
+# A private Xvfb per run (scripts/with_xvfb.sh: the command's own exit code, nothing added to its output).
+WITH_XVFB = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts", "with_xvfb.sh")
+XVFB = [WITH_XVFB, "-s", "-screen 0 1600x1000x24"]
 failures = []
 
 
@@ -43,7 +45,7 @@ def view(drape, *args, timeout=240):
 
 
 def stderr_lines(p):
-    # xvfb-run and Mesa add nothing on success; keep drape's own lines.
+    # with_xvfb.sh and Mesa add nothing on success; keep drape's own lines.
     return [l for l in p.stderr.splitlines() if l.strip()]
 
 
@@ -52,8 +54,8 @@ def main():
     ap.add_argument("--drape", required=True)
     args = ap.parse_args()
     drape = os.path.abspath(args.drape)
-    if shutil.which("xvfb-run") is None:
-        print("skip: xvfb-run is not installed")
+    if shutil.which("Xvfb") is None:
+        print("skip: Xvfb is not installed")
         return 0
     tmp = tempfile.mkdtemp(prefix="drape_tools_")
     try:

@@ -21,6 +21,8 @@ import sys
 import time
 
 # (target particle count of seed 000's experiment and beyond, N: particles per side, N^2 nearest the target)
+# A private Xvfb per run (the repository's scripts/with_xvfb.sh).
+WITH_XVFB = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts", "with_xvfb.sh")
 SIZES = [(100, 10), (300, 17), (500, 22), (700, 26), (900, 30), (1100, 33), (1300, 36), (1600, 40), (3600, 60),
          (6400, 80), (10000, 100), (100000, 316), (250000, 500), (1000000, 1000)]
 SEED000 = {100: 60, 300: 50, 500: 31, 700: 22, 900: 16, 1100: 13, 1300: 10, 1600: 8, 3600: 5, 6400: 3}
@@ -38,7 +40,7 @@ def frames_for(n):
 
 
 def run(drape, n, substeps, full_mesh, width, height):
-    cmd = ["xvfb-run", "-a", "-s", "-screen 0 1600x1000x24", drape, "view", "--size", str(n), "--substeps",
+    cmd = [WITH_XVFB, "-s", "-screen 0 1600x1000x24", drape, "view", "--size", str(n), "--substeps",
            str(substeps), "--frames", str(frames_for(n)), "--no-vsync", "--stats-json", "--width", str(width),
            "--height", str(height)]
     if full_mesh:
@@ -71,8 +73,8 @@ def main():
         return
     if not args.drape:
         sys.exit("viewer_fps: --drape is required (or --from-json)")
-    if not shutil.which("xvfb-run"):
-        sys.exit("viewer_fps: xvfb-run not found (scripts/setup.sh installs xvfb)")
+    if not shutil.which("Xvfb"):
+        sys.exit("viewer_fps: Xvfb not found (scripts/setup.sh installs xvfb)")
 
     results = []
     for target, n in SIZES:
