@@ -26,6 +26,7 @@ ready=$(mktemp "${TMPDIR:-/tmp}/drape_xvfb.XXXXXX")
 # shellcheck disable=SC2086 # the server arguments are words
 Xvfb -displayfd 3 -nolisten tcp $server_args 3>"$ready" 2>/dev/null &
 server=$!
+trap 'kill "$server" 2>/dev/null' EXIT # also when interrupted: no server left behind
 display=""
 for _ in $(seq 1 300); do # up to 30 s for the server to come up
     display=$(tr -dc '0-9' <"$ready")
