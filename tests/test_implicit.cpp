@@ -12,6 +12,7 @@
 #include <set>
 #include <span>
 
+#include "drape/garment_figures.hpp"
 #include "drape/implicit_reference.hpp"
 #include "drape/scene.hpp"
 #include "drape/scene_hang.hpp"
@@ -85,6 +86,46 @@ TEST(Implicit, ColouringSeparatesEveryCoupledPair) {
     BuiltScene b = build_scene(shirt);
     Simulation s(b.cloth, b.initial, b.params);
     expect_valid_colouring(b.cloth, s.vbd_graph());
+}
+
+// A mirror-symmetric garment is coloured in mirror pairs: the T-shirt's twins (by position) are its mask's mirror
+// images, and a particle and its twin share a colour unless they are coupled (the pairs astride the centre line).
+// Measured (drape_shirt solver=implicit seconds=3, AVX2): mirror rms at 2.8 s 9.4 mm in index order, 5.7 mm paired.
+TEST(Implicit, MirrorTwinsAreColouredTogether) {
+    SceneSpec shirt = load_scene("tshirt");
+    shirt.physics.solver = Solver::implicit;
+    BuiltScene b = build_scene(shirt);
+    const std::size_t n = b.cloth.particle_count;
+    const std::vector<std::uint32_t> mirror = tshirt_mirror_map(shirt.tshirt);
+    const std::vector<std::uint32_t> twin = vbd::mirror_twins(b.initial.x, b.initial.y, b.initial.z);
+    ASSERT_EQ(twin.size(), n);
+    ASSERT_EQ(mirror.size(), n);
+    for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(twin[i], mirror[i]) << "particle " << i;
+    Simulation s(b.cloth, b.initial, b.params);
+    expect_valid_colouring(b.cloth, s.vbd_graph());
+    std::vector<std::uint32_t> colour(n);
+    const VbdGraph& g = s.vbd_graph();
+    for (std::size_t c = 0; c < g.colour_count(); ++c)
+        for (std::uint32_t k = g.colour_offsets[c]; k < g.colour_offsets[c + 1]; ++k) colour[g.colour_vertex[k]] = std::uint32_t(c);
+    auto coupled = [&](std::uint32_t i, std::uint32_t j) {
+        for (std::uint32_t e = g.spring_offsets[i]; e < g.spring_offsets[i + 1]; ++e)
+            if (g.spring_neighbour[e] == j) return true;
+        if (!g.bend_offsets.empty())
+            for (std::uint32_t e = g.bend_offsets[i]; e < g.bend_offsets[i + 1]; ++e)
+                if (g.bend_neighbour[e] == j) return true;
+        return false;
+    };
+    std::size_t apart = 0;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        if (colour[i] == colour[twin[i]]) continue;
+        EXPECT_TRUE(coupled(i, twin[i])) << "particle " << i << " and its twin " << twin[i] << " are not coupled";
+        ++apart;
+    }
+    EXPECT_LT(apart, n / 10); // 84 of 1,008: the pairs astride the centre line
+    // A cloth that is not symmetric gets no twins (index order, as before).
+    std::vector<float> x = b.initial.x;
+    for (std::size_t i = 0; i < n; i += 10) x[i] += 0.01f;
+    EXPECT_TRUE(vbd::mirror_twins(x, b.initial.y, b.initial.z).empty());
 }
 
 // A sheet pinned along its top edge has one equilibrium: the implicit solver must settle onto the explicit one's.

@@ -107,7 +107,11 @@ void restrict_to(const float* src, std::uint32_t tc, std::uint32_t tr, float* ou
 void Simulation::cook_implicit() {
     if (implicit_) return;
     auto solver = std::make_unique<ImplicitSolver>();
-    solver->fine.cook(cloth_);
+    // A mirror-symmetric cloth (as it is now: the T-shirt at its start) is coloured in mirror pairs (vbd::mirror_twins).
+    const StateBuffer& now = cur();
+    const std::size_t n = cloth_.particle_count;
+    solver->fine.cook(cloth_, cloth_.grid ? std::vector<std::uint32_t>{}
+                                          : vbd::mirror_twins({now.x.data(), n}, {now.y.data(), n}, {now.z.data(), n}));
     if (!edge_rest_.empty()) solver->fine.set_spring_rest(edge_rest_); // seams being sewn (sewing.cpp)
     // Coarse levels: a square grid cloth that can rebuild its fabric on coarser grids.
     if (cloth_.coarsen && cloth_.grid && cloth_.grid->columns == cloth_.grid->rows && cloth_.grid->columns >= 2 * coarsest_side) {

@@ -136,7 +136,6 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
     if (params_.aero.enabled) cook_aero();
     if (!params_.colliders.empty()) cook_triangle_contact();
     if (params_.self_collision.thickness > 0.0f) cook_self_collision();
-    if (params_.solver == Solver::implicit) cook_implicit();
     if (!sc_snap_x_.empty() && initial.snapshot_x.size() == n && initial.snapshot_y.size() == n &&
         initial.snapshot_z.size() == n) { // a saved run's snapshot: the stage continues as it would have
         sc_snap_x_ = initial.snapshot_x;
@@ -173,6 +172,7 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
         store_velocity(s, i, pinned ? std::array<float, 3>{} : std::array{initial.vx[i], initial.vy[i], initial.vz[i]},
                        params_.integrator, params_.dt);
     }
+    if (params_.solver == Solver::implicit) cook_implicit(); // after the state: its colouring reads the positions
     monitor_.init(cloth_, params_);
     std::size_t inside = 0;
     for (std::size_t i = 0; i < n; ++i) {

@@ -2,6 +2,7 @@
 #include "vbd.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 
@@ -49,7 +50,52 @@ std::uint32_t grid_period(const Cloth& cloth, const VbdGraph& g) {
 
 } // namespace
 
-VbdGraph cook(const Cloth& cloth) {
+std::vector<std::uint32_t> mirror_twins(std::span<const float> x, std::span<const float> y, std::span<const float> z) {
+    const std::size_t n = x.size();
+    if (n == 0 || y.size() != n || z.size() != n) return {};
+    const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+    const double mid = 0.5 * (double(*lo) + double(*hi));
+    constexpr double tol = 1e-5;
+    // Particles by (y, z, |x - mid|) rounded to the tolerance; a twin is looked for in the 27 neighbouring keys.
+    auto cell = [&](double v) { return std::int64_t(std::floor(v / tol)); };
+    using Key = std::array<std::int64_t, 3>;
+    std::vector<std::pair<Key, std::uint32_t>> bins(n);
+    for (std::uint32_t i = 0; i < n; ++i) bins[i] = {{cell(y[i]), cell(z[i]), cell(std::abs(x[i] - mid))}, i};
+    std::sort(bins.begin(), bins.end());
+    std::vector<std::uint32_t> twin(n, UINT32_MAX);
+    std::size_t found = 0;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const double mx = 2.0 * mid - double(x[i]);
+        if (std::abs(double(x[i]) - mid) <= tol) {
+            twin[i] = i, ++found;
+            continue;
+        }
+        const std::array<std::int64_t, 3> k = {cell(y[i]), cell(z[i]), cell(std::abs(x[i] - mid))};
+        double best = tol;
+        for (int a = -1; a <= 1; ++a)
+            for (int b = -1; b <= 1; ++b)
+                for (int c = -1; c <= 1; ++c) {
+                    const Key key = {k[0] + a, k[1] + b, k[2] + c};
+                    auto it = std::lower_bound(bins.begin(), bins.end(), std::pair<Key, std::uint32_t>{key, 0u});
+                    for (; it != bins.end() && it->first == key; ++it) {
+                        const std::uint32_t j = it->second;
+                        if (j == i) continue;
+                        const double d = std::max({std::abs(double(x[j]) - mx), std::abs(double(y[j]) - double(y[i])),
+                                                   std::abs(double(z[j]) - double(z[i]))});
+                        if (d <= best) best = d, twin[i] = j;
+                    }
+                }
+        if (twin[i] != UINT32_MAX) ++found;
+    }
+    // Twins must be mutual.
+    for (std::uint32_t i = 0; i < n; ++i)
+        if (twin[i] != UINT32_MAX && twin[twin[i]] != i) twin[i] = UINT32_MAX;
+    found = std::size_t(std::count_if(twin.begin(), twin.end(), [](std::uint32_t t) { return t != UINT32_MAX; }));
+    if (double(found) < 0.95 * double(n)) return {};
+    return twin;
+}
+
+VbdGraph cook(const Cloth& cloth, std::span<const std::uint32_t> twin) {
     const std::size_t n = cloth.particle_count;
     VbdGraph g;
     g.particle_count = n;
@@ -134,22 +180,49 @@ VbdGraph cook(const Cloth& cloth) {
             colour[i] = class_colour[((i / columns) % period) * period + (i % columns) % period];
         return finish_colouring(g, colour, colours);
     }
-    std::vector<std::uint32_t> stamp; // stamp[c] == i + 1: colour c is taken by a neighbour of i
-    std::uint32_t colours = 0;
-    for (std::uint32_t i = 0; i < n; ++i) {
+    // With mirror twins (a symmetric garment) each particle is coloured together with its twin, both taking the
+    // smallest colour free at either: the sweeps then visit mirror images in the same colour, so a symmetric cloth
+    // stays symmetric to rounding (in index order the T-shirt's halves were swept in unrelated orders and settled
+    // ~1 cm apart). A twin coupled to its particle (across the mirror plane) takes its own colour after it.
+    const bool paired = twin.size() == n;
+    std::vector<std::uint32_t> stamp; // stamp[c] == tag: colour c is taken by a neighbour of the particle(s) tagged
+    std::uint32_t colours = 0, tag = 0;
+    auto mark_neighbours = [&](std::uint32_t i) {
         auto mark = [&](std::uint32_t j) {
             const std::uint32_t c = colour[j];
             if (c == UINT32_MAX) return;
             if (c >= stamp.size()) stamp.resize(c + 1, 0);
-            stamp[c] = i + 1;
+            stamp[c] = tag;
         };
         for (std::uint32_t e = g.spring_offsets[i]; e < g.spring_offsets[i + 1]; ++e) mark(g.spring_neighbour[e]);
         if (!bend.empty())
             for (std::uint32_t e = bend.offsets[i]; e < bend.offsets[i + 1]; ++e) mark(bend.neighbour[e]);
+    };
+    auto smallest_free = [&] {
         std::uint32_t c = 0;
-        while (c < stamp.size() && stamp[c] == i + 1) ++c;
+        while (c < stamp.size() && stamp[c] == tag) ++c;
+        return c;
+    };
+    auto give = [&](std::uint32_t i, std::uint32_t c) {
         colour[i] = c;
         colours = std::max(colours, c + 1);
+    };
+    for (std::uint32_t i = 0; i < n; ++i) {
+        if (colour[i] != UINT32_MAX) continue; // a twin coloured with its particle
+        const std::uint32_t t = paired ? twin[i] : UINT32_MAX;
+        ++tag;
+        mark_neighbours(i);
+        if (t == UINT32_MAX || t == i || colour[t] != UINT32_MAX) {
+            give(i, smallest_free());
+            continue;
+        }
+        mark_neighbours(t);
+        const std::uint32_t c = smallest_free();
+        give(i, c);
+        // The twin takes c too unless it is coupled to i (c is taken at it now): then the smallest colour free at it.
+        ++tag;
+        mark_neighbours(t);
+        give(t, c < stamp.size() && stamp[c] == tag ? smallest_free() : c);
     }
     return finish_colouring(g, colour, colours);
 }
@@ -236,8 +309,8 @@ void Solver::set_spring_rest(std::span<const float> edge_rest) {
         if (sl.spring_edge[k] != UINT32_MAX) sl.spring_rest[k] = edge_rest[sl.spring_edge[k]];
 }
 
-void Solver::cook(const Cloth& cloth) {
-    graph_ = vbd::cook(cloth);
+void Solver::cook(const Cloth& cloth, std::span<const std::uint32_t> twin) {
+    graph_ = vbd::cook(cloth, twin);
     static_assert(vbd_chunk % simd::width == 0, "a chunk is whole slices");
     constexpr std::size_t W = simd::width;
     const VbdGraph& g = graph_;
