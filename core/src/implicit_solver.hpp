@@ -36,6 +36,10 @@ struct ImplicitSolver {
     std::vector<float> corr_x, corr_y, corr_z; ///< the finest coarse level's correction, sampled onto the cloth
     std::vector<float> res_x, res_y, res_z;    ///< the cloth's force residual at x^n (N); then gradient scratch
     std::vector<double> block_dot;             ///< per block of particles: a partial dot product
+    /// Per particle: its piece of cloth (joined by springs) as a union-find root, and per root whether the piece holds
+    /// a fixed particle (the first step's guess, implicit_step.cpp).
+    std::vector<std::uint32_t> piece;
+    std::vector<std::uint8_t> piece_held;
 };
 
 } // namespace drape

@@ -227,6 +227,7 @@ void Simulation::set_params(const SimulationParams& params) {
     if (params_.self_collision.thickness > 0.0f) cook_self_collision();
     else sc_snap_step_ = SIZE_MAX; // off: the next time it is on, sides come from the start of that step again
     sc_plane_step_ = SIZE_MAX; // the explicit planes belong to the parameters of their run
+    implicit_fresh_ = true;    // the last step's velocities are no longer this solver's at this dt
     if (params_.solver == Solver::implicit) cook_implicit();
     monitor_.init(cloth_, params_);
     rebaseline_ = true;
