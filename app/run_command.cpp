@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <thread>
@@ -130,12 +131,32 @@ int run_command(const RunOptions& o) {
     // solver takes any step up to 0.1 s.
     if (!dt_default && !implicit) check_stability(scene.cloth, sp, o.dt ? std::string("--dt") : spec.source + ": physics.dt");
 
+    auto g = [](double v) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.4g", v);
+        return std::string(buf);
+    };
+    // A default dt below the smallest a run takes: a near-degenerate spring (a sliver triangle, two vertices almost
+    // on top of each other) sets the explicit bound.
+    if (dt_default && !implicit && !(sp.dt >= 1e-9f)) {
+        double shortest = std::numeric_limits<double>::max();
+        for (const Edge& e : scene.cloth.edges) shortest = std::min(shortest, double(e.rest));
+        throw InvalidInput(spec.source + ": the cloth's explicit stability bound is " + g(bound.dt_max) +
+                           " s, below the smallest dt (1e-9 s): its shortest spring is " + g(shortest) +
+                           " m long (a near-degenerate triangle or two vertices almost on top of each other); "
+                           "remesh the cloth or use --solver implicit");
+    }
     std::uint64_t steps = 1000;
     if (o.steps) steps = *o.steps;
-    if (o.sim_seconds) steps = static_cast<std::uint64_t>(std::ceil(*o.sim_seconds / double(sp.dt)));
+    if (o.sim_seconds) {
+        const double want = std::ceil(*o.sim_seconds / double(sp.dt)); // as a double: it may be past 2^64
+        if (!(want <= 1e9))
+            throw InvalidInput("--sim-seconds " + g(*o.sim_seconds) + " at dt = " + g(sp.dt) + " s needs " + g(want) +
+                               (implicit ? " steps" : " substeps") + " (max 1e9)");
+        steps = static_cast<std::uint64_t>(want);
+    }
     if (steps > 1'000'000'000ull)
-        throw InvalidInput("--sim-seconds " + std::to_string(*o.sim_seconds) + " at dt = " + std::to_string(sp.dt) +
-                           " s needs " + std::to_string(steps) + (implicit ? " steps" : " substeps") + " (max 1e9)");
+        throw InvalidInput("--steps " + std::to_string(steps) + " is above the maximum (1e9)");
 
     std::optional<Simulation> built;
     workers.run([&] { built.emplace(std::move(scene.cloth), scene.initial, sp); });
@@ -166,6 +187,7 @@ int run_command(const RunOptions& o) {
                 progress.update(done);
                 if (exporter && (done % o.export_every == 0 || done == steps)) exporter->write(sim, frames_written++);
             }
+            sim.check_health_now(); // the last steps since the monitor's last check: "healthy" is about the end state
         });
     } catch (const BlowUpError& e) {
         blow_up = e.what(); // the health monitor: finite, but not healthy (exit code 4)

@@ -65,6 +65,18 @@ expect_error "--size: '3.5' must be a whole number in [2, 4096]" run --size 3.5
 expect_error "--dt: value 1e400 is outside the allowed range" run --dt 1e400
 expect_error "--stiffness: 'nan' is not a number" run --stiffness nan
 
+# Found by an adversarial sweep (2026-11-25): a sliver outline's default dt (1e-21 s) is refused with its shortest
+# spring, not run as 0 substeps; a run whose last steps blow up between the monitor's checks is not reported healthy
+# (the end state is checked), and an implicit blow-up names the solver's own cause.
+echo '{"cloth": {"type": "outline", "outline": [[0,0],[1,0],[0.5,1e-6]], "spacing": 0.01}, "material": "wool"}' \
+    >"$tmpdir/sliver.json"
+expect_error "below the smallest dt (1e-9 s): its shortest spring is" run --scene "$tmpdir/sliver.json" --sim-seconds 0.2
+echo '{"cloth": {"type": "grid", "n": 24, "pins": "corners"}, "material": "wool",
+       "physics": {"solver": "implicit", "implicit": {"chebyshev_rho": 0.999999}}}' >"$tmpdir/rho.json"
+expect_exit 4 "likely cause: Chebyshev acceleration amplifying the sweeps (physics.implicit.chebyshev_rho = 0.999999)" \
+    run --scene "$tmpdir/rho.json" --steps 4
+expect_exit 4 "likely cause: self-collision's thickness (0.05 m)" run --size 32 --self-collision 0.05 --steps 127
+
 # Numbers a double cannot hold, NaN and Infinity: a range error naming the file and the JSON path, never an abort.
 echo '{"cloth": {"n": 1e400}}' >"$tmpdir/overflow.json"
 echo '{"physics": {"gravity": [0, -1e400, 0]}}' >"$tmpdir/gravity.json"

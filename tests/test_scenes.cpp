@@ -268,6 +268,10 @@ TEST(Scenes, BrokenOutlinesGiveClearErrors) {
     EXPECT_TRUE(has(scene_error_of(two), "3 to 4096")) << scene_error_of(two);
     const std::string sew = R"({"cloth": {"type": "outline", "outline": [[0,0],[1,0],[0,1]], "copy": {"sew": [[0, 7]]}}})";
     EXPECT_TRUE(has(scene_error_of(sew), "cloth.copy.sew[0]")) << scene_error_of(sew);
+    // [k, k] was read as the whole outline (24 seams on a square, as [[3, 0], [0, 3]]): refused.
+    const std::string same = R"({"cloth": {"type": "outline", "outline": [[0,0],[1,0],[0,1]], "copy": {"sew": [[1, 1]]}}})";
+    EXPECT_TRUE(has(scene_error_of(same), "cloth.copy.sew[0] = [1, 1]: from and to must be different vertices"))
+        << scene_error_of(same);
     const std::string huge = R"({"cloth": {"type": "outline", "outline": [[0,0],[100,0],[0,100]], "spacing": 0.001}})";
     EXPECT_TRUE(has(scene_error_of(huge), "test.json: cloth.spacing = 0.001 m gives this outline up to")) << scene_error_of(huge);
     EXPECT_TRUE(has(scene_error_of(huge), "at most 4000000")) << scene_error_of(huge);

@@ -2,6 +2,7 @@
 #include "drape/health_monitor.hpp"
 
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 
@@ -271,13 +272,30 @@ std::string HealthMonitor::check(const Cloth& cloth, const SimulationParams& par
         << value << unit << " exceeds the healthy bound " << bound << unit << " (what gravity"
         << (params.wind.enabled || params.aero.enabled ? ", wind" : "") << " and the start state can supply; "
         << "health_monitor.hpp); likely cause: ";
-    if (params.strain_limit.ratio > 0.0f)
+    // Self-collision thicker than about half the spacing pushes neighbouring layers (or panels sewn close) apart at
+    // once, whatever else the scene does (an adversarial sweep: every scene blew up at 0.05 m and was told to lower dt).
+    double spacing = 0.0;
+    for (const Edge& e : cloth.edges) spacing += e.rest;
+    if (!cloth.edges.empty()) spacing /= double(cloth.edges.size());
+    const bool implicit = params.solver == Solver::implicit;
+    if (params.self_collision.thickness > 0.0f && params.self_collision.thickness > 0.5 * spacing)
+        msg << "self-collision's thickness (" << params.self_collision.thickness
+            << " m) against the cloth's spacing (mean spring " << spacing
+            << " m): layers or panels closer than the thickness are pushed apart at once; lower "
+               "physics.self_collision.thickness (--self-collision)";
+    else if (params.strain_limit.ratio > 0.0f)
         msg << "the strain limit (" << params.strain_limit.ratio
             << ") fighting the springs: raise the ratio or the passes, or lower the stiffness";
     else if (started_inside_ > 0)
         msg << "the cloth started inside colliders (" << started_inside_ << " particles): move the cloth or the colliders";
     else if (user_speed_ > 0.0f)
         msg << "a fast grab (up to " << user_speed_ << " m/s): move the grabbed particle more slowly";
+    else if (implicit && params.implicit.chebyshev_rho > 0.95f)
+        msg << "Chebyshev acceleration amplifying the sweeps (physics.implicit.chebyshev_rho = "
+            << std::setprecision(7) << params.implicit.chebyshev_rho << std::setprecision(4) << "): lower it (default 0.9; 0 turns it off)";
+    else if (implicit)
+        msg << "the implicit sweeps not converging at this step (dt = " << params.dt << " s, "
+            << params.implicit.iterations << " iterations): raise the iterations or lower dt";
     else if (dt_bound_ > 0.0 && params.dt > 0.9 * dt_bound_)
         msg << "dt too close to the stability bound (dt = " << params.dt << " s, bound " << dt_bound_
             << " s): use a smaller dt (the default is 0.9 x the bound)";

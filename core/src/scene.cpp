@@ -927,6 +927,12 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
                     v[0].get<std::uint64_t>() >= pts->size() || v[1].get<std::uint64_t>() >= pts->size())
                     cloth.fail(where, "must be [from vertex, to vertex], indices in [0, " +
                                           std::to_string(pts->size() - 1) + "]");
+                if (v[0].get<std::uint64_t>() == v[1].get<std::uint64_t>()) // was read as the whole loop
+                    cloth.fail(where, "= [" + std::to_string(v[0].get<std::uint64_t>()) + ", " +
+                                          std::to_string(v[1].get<std::uint64_t>()) +
+                                          "]: from and to must be different vertices (a seam runs along the outline "
+                                          "from one to the other; for the whole outline give two ranges, e.g. [0, 2] "
+                                          "and [2, 0])");
                 o.sew.push_back({v[0].get<std::uint32_t>(), v[1].get<std::uint32_t>()});
             }
         }

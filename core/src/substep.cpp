@@ -288,6 +288,7 @@ template <bool Parallel> void Simulation::check_health() {
 }
 
 void Simulation::step(std::size_t count) { step_impl<true>(count); }
+void Simulation::check_health_now() { check_health<true>(); }
 void Simulation::step_serial(std::size_t count) { step_impl<false>(count); }
 
 void Simulation::run_stage(Stage stage) {

@@ -173,6 +173,9 @@ class Simulation {
 
     /// Same as step() but runs every stage serially on the calling thread (the "serial twin" of the parallel path).
     void step_serial(std::size_t count = 1);
+    /// The health monitor's check of the state as it is now (step() checks only every few steps, so a run's last
+    /// steps may not have been checked): throws BlowUpError, the state back at the last check that passed, as step().
+    void check_health_now();
 
     const Cloth& cloth() const noexcept { return cloth_; }
     const SimulationParams& params() const noexcept { return params_; }
