@@ -77,6 +77,15 @@ expect_exit 4 "likely cause: Chebyshev acceleration amplifying the sweeps (physi
     run --scene "$tmpdir/rho.json" --steps 4
 expect_exit 4 "likely cause: self-collision's thickness (0.05 m)" run --size 32 --self-collision 0.05 --steps 127
 
+# Meshes beyond what float arithmetic carries: refused with the figure (were inf strain, NaN normals, exit 0).
+printf 'v 0 0 0\nv 1e30 0 0\nv 0 0 1e30\nf 1 2 3\n' >"$tmpdir/huge.obj"
+echo '{"cloth": {"type": "mesh", "file": "huge.obj", "pins": "none"}, "material": "wool"}' >"$tmpdir/huge_mesh.json"
+expect_error "cloth.file: the mesh reaches 5e+29 m from its centre after cloth.scale (at most 1e4 m)" \
+    run --scene "$tmpdir/huge_mesh.json" --steps 1
+printf 'v 0 0 0\nv 1 0 0\nv 0 0 1\nv -1e-7 0 0\nf 1 2 3\nf 1 3 4\n' >"$tmpdir/near.obj"
+echo '{"cloth": {"type": "mesh", "file": "near.obj", "pins": "none"}, "material": "wool"}' >"$tmpdir/near_mesh.json"
+expect_exit 2 "the mesh's shortest edge is" run --scene "$tmpdir/near_mesh.json" --steps 1
+
 # Numbers a double cannot hold, NaN and Infinity: a range error naming the file and the JSON path, never an abort.
 echo '{"cloth": {"n": 1e400}}' >"$tmpdir/overflow.json"
 echo '{"physics": {"gravity": [0, -1e400, 0]}}' >"$tmpdir/gravity.json"

@@ -1464,6 +1464,24 @@ BuiltScene build_scene_body(const SceneSpec& s) {
         // Positions relative to m.centre, the cloth's origin (Cloth::origin, set below).
         add_mesh_panel(a, *m.mesh,
                        {m.scale, {0.0f, 0.0f, 0.0f}, s.model == MaterialModel::fabric ? s.fabric.density : m.density});
+        // Sizes float arithmetic can carry: a mesh of 1e30 m gave inf areas (node mass 0, strain inf) and NaN
+        // normals with exit 0; two vertices 1e-7 apart gave a spring stiffness scale of 6e6 and a default dt of 0.
+        double extent = 0.0, shortest = std::numeric_limits<double>::max();
+        for (std::size_t i = 0; i < a.particle_count(); ++i)
+            extent = std::max({extent, std::fabs(double(a.x[i])), std::fabs(double(a.y[i])), std::fabs(double(a.z[i]))});
+        for (const Edge& e : a.edges) shortest = std::min(shortest, double(e.rest));
+        auto num = [](double v) {
+            char buf[32];
+            std::snprintf(buf, sizeof buf, "%.4g", v);
+            return std::string(buf);
+        };
+        if (!(extent <= 1e4))
+            throw InvalidInput(s.source + ": cloth.file: the mesh reaches " + num(extent) +
+                               " m from its centre after cloth.scale (at most 1e4 m): lower cloth.scale");
+        if (!a.edges.empty() && !(shortest >= 1e-5))
+            throw InvalidInput(s.source + ": cloth.file: the mesh's shortest edge is " + num(shortest) +
+                               " m after cloth.scale (at least 1e-5 m): weld vertices that nearly coincide, or raise "
+                               "cloth.scale");
         std::vector<float> inv_mass = a.inverse_masses();
         const std::vector<float> free_inv_mass = inv_mass;
         if (m.pins == MeshPins::top)
