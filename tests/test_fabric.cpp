@@ -164,6 +164,20 @@ TEST(Fabric, ValidateNamesFieldUnitAndRange) {
     f = *find_fabric("silk");
     f.stretch_u = std::nanf("");
     EXPECT_THROW(validate_fabric(f, "m"), InvalidInput);
+    // Damping within its range but above what a spring of this stiff a fabric takes: named as the user's field, with
+    // the most this fabric allows (it was "material.structural.damping = 3241 N*s/m", a field no file has).
+    f = *find_fabric("canvas");
+    f.damping = 0.1f;
+    try {
+        validate_fabric(f, "c.json: material");
+        FAIL() << "accepted canvas with damping 0.1 s";
+    } catch (const InvalidInput& e) {
+        EXPECT_TRUE(has(e.what(), "c.json: material.damping = 0.1 s gives springs of this fabric's stretch stiffness"))
+            << e.what();
+        EXPECT_TRUE(has(e.what(), "s for this fabric")) << e.what();
+    }
+    f.damping = 0.02f;
+    EXPECT_NO_THROW(validate_fabric(f, "c.json: material"));
 }
 
 TEST(Fabric, SceneMaterialAsPresetName) {

@@ -158,6 +158,16 @@ void validate_fabric(const Fabric& f, const std::string& what) {
                                " is outside the allowed range " + range_text(fl.range.lo, fl.range.hi, fl.range.unit));
         }
     }
+    // The springs' damping is damping x stiffness (Rayleigh), at most 1e3 N*s/m a spring (cook_cloth): a stiff fabric
+    // allows less than the range above (canvas at 0.1 s was refused as "material.structural.damping = 3241 N*s/m").
+    const double stiffest = std::max(double(f.stretch_u), double(f.stretch_v));
+    if (stiffest > 0.0 && double(f.damping) * stiffest > 1e3) {
+        std::ostringstream v;
+        v << what << ".damping = " << double(f.damping) << " s gives springs of this fabric's stretch stiffness ("
+          << stiffest << " N/m) a damping of " << double(f.damping) * stiffest
+          << " N*s/m, above the most a spring takes (1e3 N*s/m): at most " << 1e3 / stiffest << " s for this fabric";
+        throw InvalidInput(v.str());
+    }
 }
 
 } // namespace drape
