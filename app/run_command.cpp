@@ -113,6 +113,20 @@ int run_command(const RunOptions& o) {
     if (o.strain_every) spec.physics.strain_limit.every = *o.strain_every;
     if (o.self_collision) spec.physics.self_collision.thickness = *o.self_collision;
     if (o.self_collision_substeps) spec.physics.self_collision.substeps = *o.self_collision_substeps;
+    // Flags that would change nothing in this run are refused, as the implicit solver's flags are with the explicit
+    // one (an adversarial sweep found them accepted and echoed in the JSON while ignored).
+    if (o.self_collision_substeps && !implicit)
+        throw InvalidInput("--self-collision-substeps: a flag of the implicit solver's self-collision, but the solver "
+                           "is explicit; add --solver implicit");
+    if (o.self_collision_substeps && !(spec.physics.self_collision.thickness > 0.0f))
+        throw InvalidInput("--self-collision-substeps: self-collision is off; turn it on with --self-collision H (or "
+                           "the scene's physics.self_collision.thickness)");
+    if ((o.strain_passes || o.strain_every) && !(spec.physics.strain_limit.ratio > 0.0f))
+        throw InvalidInput(std::string(o.strain_passes ? "--strain-passes" : "--strain-every") +
+                           ": strain limiting is off; turn it on with --strain-limit R (or the scene's "
+                           "physics.strain_limit.ratio)");
+    if (o.wind_strength && !spec.physics.wind.enabled)
+        throw InvalidInput("--wind-strength: the wind is off; turn it on with --wind (or the scene's physics.wind)");
     spec.physics.kernel = o.kernel == "grid" ? KernelPath::grid : o.kernel == "csr" ? KernelPath::csr : KernelPath::automatic;
     spec.physics.fused = !o.staged;
     if (o.dt) spec.dt = static_cast<float>(*o.dt);

@@ -77,6 +77,13 @@ expect_exit 4 "likely cause: Chebyshev acceleration amplifying the sweeps (physi
     run --scene "$tmpdir/rho.json" --steps 4
 expect_exit 4 "likely cause: self-collision's thickness (0.05 m)" run --size 32 --self-collision 0.05 --steps 127
 
+# Flags that would change nothing in the run are refused (they were accepted and echoed in the JSON while ignored).
+expect_error "--self-collision-substeps: a flag of the implicit solver's self-collision" run --self-collision-substeps 3
+expect_error "--self-collision-substeps: self-collision is off" run --solver implicit --self-collision-substeps 3
+expect_error "--strain-passes: strain limiting is off" run --strain-passes 7
+expect_error "--strain-every: strain limiting is off" run --strain-every 3
+expect_error "--wind-strength: the wind is off" run --wind-strength 50
+
 # Meshes beyond what float arithmetic carries: refused with the figure (were inf strain, NaN normals, exit 0).
 printf 'v 0 0 0\nv 1e30 0 0\nv 0 0 1e30\nf 1 2 3\n' >"$tmpdir/huge.obj"
 echo '{"cloth": {"type": "mesh", "file": "huge.obj", "pins": "none"}, "material": "wool"}' >"$tmpdir/huge_mesh.json"
