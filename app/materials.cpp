@@ -171,6 +171,23 @@ void apply_solver_flags(SceneSpec& spec, const SolverFlags& f) {
     if (f.strain_limit) spec.physics.strain_limit.ratio = *f.strain_limit;
 }
 
+std::string self_collision_thickness_warning(const Simulation& sim) {
+    const float h = sim.params().self_collision.thickness;
+    const Cloth& c = sim.cloth();
+    if (!(h > 0.0f) || c.edges.empty()) return {};
+    double mean = 0.0;
+    for (const Edge& e : c.edges) mean += e.rest;
+    mean /= double(c.edges.size());
+    if (!(double(h) > 0.5 * mean)) return {};
+    char buf[320];
+    std::snprintf(buf, sizeof buf,
+                  "self-collision's thickness (%.3g m) is above half the cloth's mean spring length (%.3g m): every "
+                  "particle lies within it of its neighbours' triangles, so the stage is slow and may push the cloth "
+                  "apart; a thickness of a few millimetres below the spacing is the intended use",
+                  double(h), mean);
+    return buf;
+}
+
 std::string single_level_implicit_warning(const Simulation& sim) {
     if (sim.params().solver != Solver::implicit || sim.implicit_levels() != 1 || sim.cloth().particle_count < 256)
         return {};

@@ -175,8 +175,8 @@ int run_command(const RunOptions& o) {
     std::optional<Simulation> built;
     workers.run([&] { built.emplace(std::move(scene.cloth), scene.initial, sp); });
     Simulation& sim = *built;
-    if (const std::string w = single_level_implicit_warning(sim); !w.empty())
-        std::cerr << "drape run: warning: " << w << "\n";
+    for (const std::string& w : {single_level_implicit_warning(sim), self_collision_thickness_warning(sim)})
+        if (!w.empty()) std::cerr << "drape run: warning: " << w << "\n";
     const std::size_t particles = sim.cloth().particle_count;
     std::unique_ptr<ObjExporter> exporter;
     std::size_t frames_written = 0;

@@ -75,7 +75,15 @@ echo '{"cloth": {"type": "grid", "n": 24, "pins": "corners"}, "material": "wool"
        "physics": {"solver": "implicit", "implicit": {"chebyshev_rho": 0.999999}}}' >"$tmpdir/rho.json"
 expect_exit 4 "likely cause: Chebyshev acceleration amplifying the sweeps (physics.implicit.chebyshev_rho = 0.999999)" \
     run --scene "$tmpdir/rho.json" --steps 4
-expect_exit 4 "likely cause: self-collision's thickness (0.05 m)" run --size 32 --self-collision 0.05 --steps 127
+# (Two lines: the warning at the start that the thickness is above half the spacing, then the blow-up.)
+timeout 60 "$DRAPE" run --size 32 --self-collision 0.05 --steps 127 >"$out" 2>"$err"
+code=$?
+if [ "$code" = 4 ] && [ "$(wc -l <"$err")" = 2 ] && grep -qF "warning: self-collision's thickness (0.05 m) is above half" "$err" &&
+    grep -qF "likely cause: self-collision's thickness (0.05 m)" "$err"; then
+    echo "ok: drape run --size 32 --self-collision 0.05 --steps 127 -> warned, then exit 4 naming self-collision"
+else
+    echo "FAIL: drape run --size 32 --self-collision 0.05 --steps 127 -> exit $code:"; cat "$err"; fail=1
+fi
 
 # Flags that would change nothing in the run are refused (they were accepted and echoed in the JSON while ignored).
 expect_error "--self-collision-substeps: a flag of the implicit solver's self-collision" run --self-collision-substeps 3
