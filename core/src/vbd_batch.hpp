@@ -177,14 +177,14 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
         return e;
     };
     fmask searching(true);
-    for (int halving = 0; halving < 8; ++halving) {
+    for (int halving = 0; halving < vbd_line_search_halvings; ++halving) {
         searching = searching & (change(ddx, ddy, ddz) > zero);
         if (!xsimd::any(searching)) break;
         const fbatch half(0.5f);
         ddx = simd::select(searching, ddx * half, ddx);
         ddy = simd::select(searching, ddy * half, ddy);
         ddz = simd::select(searching, ddz * half, ddz);
-        if (halving == 7) {
+        if (halving == vbd_line_search_halvings - 1) {
             ddx = simd::select(searching, zero, ddx);
             ddy = simd::select(searching, zero, ddy);
             ddz = simd::select(searching, zero, ddz);
