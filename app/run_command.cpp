@@ -97,6 +97,8 @@ int run_command(const RunOptions& o) {
                                "; add --material springs for the seeds' spring model");
     if (o.stiffness) spec.stiffness = *o.stiffness;
     if (o.damping) spec.damping_ratio = *o.damping;
+    if (o.export_obj && o.export_obj->empty())
+        throw InvalidInput("--export-obj: an empty path; give the directory to write the frames into");
     if (o.drag) spec.physics.air_drag = *o.drag;
     apply_solver_flags(spec, {.solver = o.solver,
                               .iterations = o.iterations,

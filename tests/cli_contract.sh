@@ -92,6 +92,8 @@ expect_error "--strain-passes: strain limiting is off" run --strain-passes 7
 expect_error "--strain-every: strain limiting is off" run --strain-every 3
 expect_error "--wind-strength: the wind is off" run --wind-strength 50
 
+expect_error "--export-obj: an empty path" run --steps 1 --export-obj ''
+
 # Meshes beyond what float arithmetic carries: refused with the figure (were inf strain, NaN normals, exit 0).
 printf 'v 0 0 0\nv 1e30 0 0\nv 0 0 1e30\nf 1 2 3\n' >"$tmpdir/huge.obj"
 echo '{"cloth": {"type": "mesh", "file": "huge.obj", "pins": "none"}, "material": "wool"}' >"$tmpdir/huge_mesh.json"

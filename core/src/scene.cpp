@@ -501,7 +501,7 @@ std::array<std::uint32_t, 2> read_cell(const ObjectReader& r, const json& v, con
 std::array<float, 3> read_axis(ObjectReader& p, const std::string& key, std::array<float, 3> fallback) {
     const std::array<float, 3> a = p.vec3(key, 1e6, "", fallback);
     const double len = std::sqrt(double(a[0]) * a[0] + double(a[1]) * a[1] + double(a[2]) * a[2]);
-    if (!(len >= 1e-6))
+    if (!(len >= 1e-6 * (1.0 - 1e-6))) // the bound itself passes (1e-6 read into a float is 9.99999997e-7)
         p.fail(p.at(key), "has length " + format_number(len) + "; an axis needs a length of at least 1e-6");
     return a;
 }
