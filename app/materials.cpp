@@ -174,16 +174,18 @@ void apply_solver_flags(SceneSpec& spec, const SolverFlags& f) {
 std::string self_collision_thickness_warning(const Simulation& sim) {
     const float h = sim.params().self_collision.thickness;
     const Cloth& c = sim.cloth();
-    if (!(h > 0.0f) || c.edges.empty()) return {};
-    double mean = 0.0;
-    for (const Edge& e : c.edges) mean += e.rest;
-    mean /= double(c.edges.size());
-    if (!(double(h) > 0.5 * mean)) return {};
+    if (!(h > 0.0f)) return {};
+    double mean = 0.0; // the mean structural spring: the cloth's spacing
+    std::size_t structural = 0;
+    for (const Edge& e : c.edges)
+        if (e.kind == SpringKind::structural) mean += e.rest, ++structural;
+    if (structural > 0) mean /= double(structural);
+    if (!(mean > 0.0) || !(double(h) > 0.5 * mean)) return {};
     char buf[320];
     std::snprintf(buf, sizeof buf,
-                  "self-collision's thickness (%.3g m) is above half the cloth's mean spring length (%.3g m): every "
-                  "particle lies within it of its neighbours' triangles, so the stage is slow and may push the cloth "
-                  "apart; a thickness of a few millimetres below the spacing is the intended use",
+                  "self-collision's thickness (%.3g m) is above half the cloth's spacing (mean structural spring "
+                  "%.3g m): every particle lies within it of its neighbours' triangles, so the stage is slow and may "
+                  "push the cloth apart; a thickness of a few millimetres, below half the spacing, is the intended use",
                   double(h), mean);
     return buf;
 }

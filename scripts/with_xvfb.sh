@@ -22,11 +22,19 @@ if ! command -v Xvfb >/dev/null 2>&1; then
     echo "with_xvfb: Xvfb not found; install it with scripts/setup.sh (Debian package xvfb)" >&2
     exit 2
 fi
-ready=$(mktemp "${TMPDIR:-/tmp}/drape_xvfb.XXXXXX")
+ready=$(mktemp "${TMPDIR:-/tmp}/drape_xvfb.XXXXXX") || {
+    echo "with_xvfb: cannot create a temporary file in ${TMPDIR:-/tmp}" >&2
+    exit 3
+}
+server=""
+cleanup() { # also when interrupted: no server or file left behind
+    if [ -n "$server" ]; then kill "$server" 2>/dev/null; fi
+    rm -f "$ready"
+}
+trap cleanup EXIT
 # shellcheck disable=SC2086 # the server arguments are words
 Xvfb -displayfd 3 -nolisten tcp $server_args 3>"$ready" 2>/dev/null &
 server=$!
-trap 'kill "$server" 2>/dev/null' EXIT # also when interrupted: no server left behind
 display=""
 for _ in $(seq 1 300); do # up to 30 s for the server to come up
     display=$(tr -dc '0-9' <"$ready")
@@ -36,8 +44,6 @@ for _ in $(seq 1 300); do # up to 30 s for the server to come up
 done
 rm -f "$ready"
 if [ -z "$display" ]; then
-    kill "$server" 2>/dev/null
-    wait "$server" 2>/dev/null
     echo "with_xvfb: Xvfb did not start (arguments: $server_args)" >&2
     exit 3
 fi
@@ -45,4 +51,5 @@ DISPLAY=":$display" "$@"
 code=$?
 kill "$server" 2>/dev/null
 wait "$server" 2>/dev/null
+server="" # reaped: the exit trap must not signal a reused pid
 exit "$code"

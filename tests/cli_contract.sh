@@ -93,6 +93,7 @@ expect_error "--strain-every: strain limiting is off" run --strain-every 3
 expect_error "--wind-strength: the wind is off" run --wind-strength 50
 
 expect_error "--export-obj: an empty path" run --steps 1 --export-obj ''
+expect_error "--sim-seconds 10 at dt = 1e-09 s needs 1e+10 substeps (max 1e9)" run --dt 1e-9 --sim-seconds 10
 
 # Meshes beyond what float arithmetic carries: refused with the figure (were inf strain, NaN normals, exit 0).
 printf 'v 0 0 0\nv 1e30 0 0\nv 0 0 1e30\nf 1 2 3\n' >"$tmpdir/huge.obj"

@@ -371,6 +371,18 @@ template <bool Parallel> void Simulation::implicit_step() {
             root[i] = find(i);
             if (inv_mass[i] == 0.0f) is.piece_held[root[i]] = 1;
         }
+        // A piece resting on a collider is held too: its gravity guess would go into it (a T-shirt on its body, a
+        // cloth on a disc, a saved state resumed).
+        if (!params_.colliders.empty())
+            for (std::uint32_t i = 0; i < n; ++i) {
+                if (is.piece_held[root[i]] || inv_mass[i] == 0.0f) continue;
+                const Vec3f p{a.x[i] + h2 * gx, a.y[i] + h2 * gy, a.z[i] + h2 * gz};
+                for (const Collider& c : params_.colliders)
+                    if (is_inside(c, p)) {
+                        is.piece_held[root[i]] = 1;
+                        break;
+                    }
+            }
     }
     float* pred_x = is.fine.pred_x();
     float* pred_y = is.fine.pred_y();

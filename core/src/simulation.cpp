@@ -214,6 +214,10 @@ KernelPath Simulation::resolve_params(const SimulationParams& params) const {
 
 void Simulation::set_params(const SimulationParams& params) {
     const KernelPath kernel = resolve_params(params);
+    // The last step's velocities stop being this solver's history only when the solver, dt or integrator changes (the
+    // viewer sets parameters on any edit: a wind or friction change must not re-guess a resting cloth).
+    if (params.solver != params_.solver || params.dt != params_.dt || params.integrator != params_.integrator)
+        implicit_fresh_ = true;
     // A new integrator or dt changes what u, v, w mean (velocity, or displacement per step): convert them.
     if (params.integrator != params_.integrator || params.dt != params_.dt) {
         for (std::size_t i = 0; i < cloth_.particle_count; ++i)
@@ -227,7 +231,6 @@ void Simulation::set_params(const SimulationParams& params) {
     if (params_.self_collision.thickness > 0.0f) cook_self_collision();
     else sc_snap_step_ = SIZE_MAX; // off: the next time it is on, sides come from the start of that step again
     sc_plane_step_ = SIZE_MAX; // the explicit planes belong to the parameters of their run
-    implicit_fresh_ = true;    // the last step's velocities are no longer this solver's at this dt
     if (params_.solver == Solver::implicit) cook_implicit();
     monitor_.init(cloth_, params_);
     rebaseline_ = true;
