@@ -175,11 +175,7 @@ std::string self_collision_thickness_warning(const Simulation& sim) {
     const float h = sim.params().self_collision.thickness;
     const Cloth& c = sim.cloth();
     if (!(h > 0.0f)) return {};
-    double mean = 0.0; // the mean structural spring: the cloth's spacing
-    std::size_t structural = 0;
-    for (const Edge& e : c.edges)
-        if (e.kind == SpringKind::structural) mean += e.rest, ++structural;
-    if (structural > 0) mean /= double(structural);
+    const double mean = cloth_spacing(c);
     if (!(mean > 0.0) || !(double(h) > 0.5 * mean)) return {};
     char buf[320];
     std::snprintf(buf, sizeof buf,

@@ -134,4 +134,15 @@ std::vector<std::uint32_t> sewn_representatives(const SeamSet& seams, std::size_
     return rep;
 }
 
+double cloth_spacing(const Cloth& cloth) {
+    double structural = 0.0, all = 0.0;
+    std::size_t count = 0;
+    for (const Edge& e : cloth.edges) {
+        all += e.rest;
+        if (e.kind == SpringKind::structural) structural += e.rest, ++count;
+    }
+    if (count) return structural / double(count);
+    return cloth.edges.empty() ? 0.0 : all / double(cloth.edges.size());
+}
+
 } // namespace drape

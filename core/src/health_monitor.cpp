@@ -274,11 +274,7 @@ std::string HealthMonitor::check(const Cloth& cloth, const SimulationParams& par
         << "health_monitor.hpp); likely cause: ";
     // Self-collision thicker than about half the spacing pushes neighbouring layers (or panels sewn close) apart at
     // once, whatever else the scene does (an adversarial sweep: every scene blew up at 0.05 m and was told to lower dt).
-    double spacing = 0.0; // the mean structural spring: the cloth's spacing
-    std::size_t structural = 0;
-    for (const Edge& e : cloth.edges)
-        if (e.kind == SpringKind::structural) spacing += e.rest, ++structural;
-    if (structural > 0) spacing /= double(structural);
+    const double spacing = cloth_spacing(cloth);
     const bool implicit = params.solver == Solver::implicit;
     if (params.self_collision.thickness > 0.0f && params.self_collision.thickness > 0.5 * spacing)
         msg << "self-collision's thickness (" << params.self_collision.thickness

@@ -14,6 +14,7 @@
 // the scratch is cooked with the solver (cook_implicit).
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 #include "drape/simulation.hpp"
 #include "for_each_index.hpp"
@@ -110,7 +111,19 @@ void Simulation::cook_implicit() {
     // A mirror-symmetric cloth (as it is now: the T-shirt at its start) is coloured in mirror pairs (vbd::mirror_twins).
     const StateBuffer& now = cur();
     const std::size_t n = cloth_.particle_count;
-    solver->piece.assign(cloth_.particle_count, 0);
+    // The pieces of cloth (particles joined by springs, seams included): a union-find, each particle's root stored.
+    solver->piece.resize(cloth_.particle_count);
+    std::uint32_t* root = solver->piece.data();
+    std::iota(root, root + cloth_.particle_count, 0u);
+    auto find = [&](std::uint32_t i) {
+        while (root[i] != i) i = root[i] = root[root[i]];
+        return i;
+    };
+    for (const Edge& e : cloth_.edges) {
+        const std::uint32_t ra = find(e.a), rb = find(e.b);
+        if (ra != rb) root[std::max(ra, rb)] = std::min(ra, rb);
+    }
+    for (std::uint32_t i = 0; i < cloth_.particle_count; ++i) root[i] = find(i);
     solver->piece_held.assign(cloth_.particle_count, 0);
     solver->fine.cook(cloth_, cloth_.grid ? std::vector<std::uint32_t>{}
                                           : vbd::mirror_twins({now.x.data(), n}, {now.y.data(), n}, {now.z.data(), n}));
@@ -351,26 +364,15 @@ template <bool Parallel> void Simulation::implicit_step() {
     // these. Without one (the first step, a new dt or solver) gravity is taken whole: taken from the state's zero
     // history (s = 0), a free-falling stiff mesh fell at 1 % of g for good, the sweeps' few vertex-sized moves
     // being all the acceleration the next step saw (a 4 x 4 wool mask: 0.036 m/s after 0.3 s, free fall 2.94).
-    // A piece's particles fall together only if none of them is fixed: the pieces (union-find over the springs, on
-    // arrays cooked with the solver: no allocation) and whether each holds a fixed particle.
+    // A piece's particles fall together only if none of them is fixed (pins and grabs change, so this is asked on
+    // each such step; the pieces themselves were found when the solver was cooked).
     const bool fresh = implicit_fresh_;
     implicit_fresh_ = false;
     if (fresh) {
-        std::uint32_t* root = is.piece.data();
-        for (std::uint32_t i = 0; i < n; ++i) root[i] = i;
-        auto find = [&](std::uint32_t i) {
-            while (root[i] != i) i = root[i] = root[root[i]];
-            return i;
-        };
-        for (const Edge& e : cloth_.edges) {
-            const std::uint32_t ra = find(e.a), rb = find(e.b);
-            if (ra != rb) root[std::max(ra, rb)] = std::min(ra, rb);
-        }
+        const std::uint32_t* root = is.piece.data();
         std::fill(is.piece_held.begin(), is.piece_held.end(), std::uint8_t(0));
-        for (std::uint32_t i = 0; i < n; ++i) {
-            root[i] = find(i);
+        for (std::uint32_t i = 0; i < n; ++i)
             if (inv_mass[i] == 0.0f) is.piece_held[root[i]] = 1;
-        }
         // A piece resting on a collider is held too: its gravity guess would go into it (a T-shirt on its body, a
         // cloth on a disc, a saved state resumed).
         if (!params_.colliders.empty())

@@ -1471,16 +1471,11 @@ BuiltScene build_scene_body(const SceneSpec& s) {
             extent = std::max({extent, std::fabs(double(a.x[i])), std::fabs(double(a.y[i])), std::fabs(double(a.z[i]))});
         for (const Edge& e : a.edges) // the triangles' edges (bend springs join opposite vertices, not edges)
             if (e.kind == SpringKind::structural || e.kind == SpringKind::shear) shortest = std::min(shortest, double(e.rest));
-        auto num = [](double v) {
-            char buf[32];
-            std::snprintf(buf, sizeof buf, "%.4g", v);
-            return std::string(buf);
-        };
         if (!(extent <= 1e4))
-            throw InvalidInput(s.source + ": cloth.file: the mesh reaches " + num(extent) +
+            throw InvalidInput(s.source + ": cloth.file: the mesh reaches " + format_number(extent) +
                                " m from its centre after cloth.scale (at most 1e4 m): lower cloth.scale");
         if (shortest != std::numeric_limits<double>::max() && !(shortest >= 1e-5))
-            throw InvalidInput(s.source + ": cloth.file: the mesh's shortest edge is " + num(shortest) +
+            throw InvalidInput(s.source + ": cloth.file: the mesh's shortest edge is " + format_number(shortest) +
                                " m after cloth.scale (at least 1e-5 m): weld vertices that nearly coincide, or raise "
                                "cloth.scale");
         std::vector<float> inv_mass = a.inverse_masses();

@@ -120,16 +120,10 @@ void Simulation::cook_self_collision() {
         // The mean rest length of the structural springs (of all springs if there are none) sizes the patches. The
         // shortest rest length of the springs along triangle edges (structural and shear) decides whether 1-ring
         // neighbours are exempt; without such springs, the shortest triangle edge now.
-        double sum = 0.0, all = 0.0;
-        std::size_t count = 0;
         float shortest = std::numeric_limits<float>::max();
-        for (const Edge& e : cloth_.edges) {
-            all += e.rest;
-            if (e.kind == SpringKind::structural) sum += e.rest, ++count;
+        for (const Edge& e : cloth_.edges)
             if (e.kind == SpringKind::structural || e.kind == SpringKind::shear) shortest = std::min(shortest, e.rest);
-        }
-        sc_mean_edge_ = count ? float(sum / double(count))
-                              : (cloth_.edges.empty() ? 0.0f : float(all / double(cloth_.edges.size())));
+        sc_mean_edge_ = float(cloth_spacing(cloth_));
         if (shortest == std::numeric_limits<float>::max()) {
             const StateBuffer& s = buffers_[current_];
             for (std::size_t e = 0; e < keys.size(); ++e) {

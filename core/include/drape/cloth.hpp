@@ -152,4 +152,8 @@ struct GridStructuralRest {
 };
 std::optional<GridStructuralRest> uniform_grid_structural(const Cloth& cloth);
 
+/// The cloth's spacing: the mean rest length of its structural springs (of all its springs if it has none; 0 without
+/// springs), m. Sizes self-collision's patches, and is what its thickness is judged against.
+double cloth_spacing(const Cloth& cloth);
+
 } // namespace drape
