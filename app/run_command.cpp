@@ -129,6 +129,10 @@ int run_command(const RunOptions& o) {
                            "physics.strain_limit.ratio)");
     if (o.wind_strength && !spec.physics.wind.enabled)
         throw InvalidInput("--wind-strength: the wind is off; turn it on with --wind (or the scene's physics.wind)");
+    if (implicit && (o.kernel != "auto" || o.staged))
+        throw InvalidInput(std::string(o.staged ? "--staged" : "--kernel " + o.kernel) +
+                           ": a choice of the explicit solver's spring pass, but the solver is implicit (its sweeps "
+                           "solve every energy per vertex); drop it, or use --solver explicit");
     spec.physics.kernel = o.kernel == "grid" ? KernelPath::grid : o.kernel == "csr" ? KernelPath::csr : KernelPath::automatic;
     spec.physics.fused = !o.staged;
     if (o.dt) spec.dt = static_cast<float>(*o.dt);
@@ -175,6 +179,11 @@ int run_command(const RunOptions& o) {
     std::optional<Simulation> built;
     workers.run([&] { built.emplace(std::move(scene.cloth), scene.initial, sp); });
     Simulation& sim = *built;
+    // --fas changes the coarse levels' solve; a cloth without coarse levels (a mesh, the springs model, a small grid)
+    // would run exactly as without it.
+    if (o.fas && sim.implicit_levels() == 1)
+        throw InvalidInput("--fas: the coarse correction of the multilevel guess, but this cloth has no coarse levels "
+                           "(only square grids of the fabric model, 10 x 10 and up, have them); drop --fas");
     for (const std::string& w : {single_level_implicit_warning(sim), self_collision_thickness_warning(sim)})
         if (!w.empty()) std::cerr << "drape run: warning: " << w << "\n";
     const std::size_t particles = sim.cloth().particle_count;

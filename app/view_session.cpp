@@ -185,8 +185,8 @@ ViewSession::ViewSession(const std::string& scene, std::optional<std::uint32_t> 
     r.history = History::none;
     install(build(r.target, nullptr, false), r);
     message_ = {};
-    single_level_warned_ = false;
-    warn_single_level_implicit(); // the one message a start may show
+    single_level_warned_ = thickness_warned_ = false;
+    warn_about_settings(); // the one message a start may show
     // An explicit --dt the cloth cannot take is refused (build() would quietly lower it).
     if (dt && params_.solver == Solver::explicit_euler && *dt > dt_bound_)
         throw InvalidInput("--dt: value " + fmt(*dt) + " s is above this cloth's explicit stability bound " +
@@ -463,8 +463,8 @@ void ViewSession::install(Built built, const Request& r) {
     publisher_ = std::move(built.publisher);
     sim_ = std::move(built.sim);
     restore(built.snap);
-    if (r.new_scene) single_level_warned_ = false;
-    warn_single_level_implicit();
+    if (r.new_scene) single_level_warned_ = thickness_warned_ = false;
+    warn_about_settings();
     ++generation_;
     if (r.new_scene) ++scene_generation_;
     if (r.clears_error) {
@@ -621,14 +621,20 @@ bool ViewSession::try_set_params(const SimulationParams& p) {
         return false;
     }
     params_ = p;
-    warn_single_level_implicit();
+    warn_about_settings();
     return true;
 }
 
-void ViewSession::warn_single_level_implicit() {
-    const std::string w = sim_ ? single_level_implicit_warning(*sim_) : std::string();
-    if (!w.empty() && !single_level_warned_) post(MessageLevel::warning, w);
-    single_level_warned_ = !w.empty();
+void ViewSession::warn_about_settings() {
+    // Each warning is posted once when it starts to apply; two starting together share the message line.
+    std::string text;
+    auto check = [&](const std::string& w, bool& warned) {
+        if (!w.empty() && !warned) text += (text.empty() ? "" : "; and ") + w;
+        warned = !w.empty();
+    };
+    check(sim_ ? single_level_implicit_warning(*sim_) : std::string(), single_level_warned_);
+    check(sim_ ? self_collision_thickness_warning(*sim_) : std::string(), thickness_warned_);
+    if (!text.empty()) post(MessageLevel::warning, text);
 }
 
 std::shared_ptr<const ViewSession::KeepState> ViewSession::capture_state() {
@@ -1166,7 +1172,7 @@ void ViewSession::set_multilevel(bool on) {
     p.implicit.multilevel = on;
     commit_params(p, "multilevel guess");
     single_level_warned_ = false;
-    warn_single_level_implicit();
+    warn_about_settings();
 }
 
 void ViewSession::set_iteration_budget(bool on) {

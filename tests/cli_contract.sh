@@ -91,6 +91,10 @@ expect_error "--self-collision-substeps: self-collision is off" run --solver imp
 expect_error "--strain-passes: strain limiting is off" run --strain-passes 7
 expect_error "--strain-every: strain limiting is off" run --strain-every 3
 expect_error "--wind-strength: the wind is off" run --wind-strength 50
+expect_error "--kernel csr: a choice of the explicit solver" run --solver implicit --kernel csr --steps 1
+expect_error "--staged: a choice of the explicit solver" run --solver implicit --staged --steps 1
+expect_error "but the multilevel guess is off (--single-level)" run --solver implicit --fas --single-level --steps 1
+expect_error "but this cloth has no coarse levels" run --scene tshirt --solver implicit --fas --steps 1
 
 expect_error "--export-obj: an empty path" run --steps 1 --export-obj ''
 expect_error "--sim-seconds 10 at dt = 1e-09 s needs 1e+10 substeps (max 1e9)" run --dt 1e-9 --sim-seconds 10

@@ -152,6 +152,54 @@ TEST(Implicit, UnheldClothFallsFreely) {
     }
 }
 
+// A cloth let go later in a run (its pins released, a grab released) falls freely too: its history says it was at
+// rest, and read as before (s = 0) a stiff little mesh fell at a few per cent of g.
+TEST(Implicit, ClothLetGoLaterFallsFreely) {
+    for (const bool by_grab : {false, true}) {
+        SceneSpec spec = parse_scene(R"({"cloth": {"type": "mask", "panels": [{"name": "a", "cell_size": 0.02,
+                                         "rows": ["1111", "1111", "1111", "1111"]}]}, "material": "wool"})",
+                                     "hold.json");
+        spec.physics.solver = Solver::implicit;
+        spec.physics.air_drag = 0.0f;
+        spec.dt = 1.0f / 30.0f;
+        BuiltScene b = build_scene(spec);
+        Simulation sim(b.cloth, b.initial, b.params);
+        if (by_grab)
+            sim.grab(0, {sim.x()[0], sim.y()[0], sim.z()[0]});
+        else
+            sim.set_pinned(0, true);
+        sim.step(30); // 1 s hanging from particle 0
+        if (by_grab)
+            sim.release_grab();
+        else
+            sim.set_pinned(0, false);
+        double v0 = 0.0, vy = 0.0;
+        for (std::size_t i = 0; i < b.cloth.particle_count; ++i) v0 += sim.velocity(i)[1];
+        sim.step(9); // 0.3 s
+        for (std::size_t i = 0; i < b.cloth.particle_count; ++i) vy += sim.velocity(i)[1];
+        const double n = double(b.cloth.particle_count);
+        EXPECT_NEAR((vy - v0) / n, -9.81 * 0.3, 0.02 * 9.81 * 0.3) << (by_grab ? "grab" : "pin");
+    }
+    // A cloth lying on a table that is taken away.
+    SceneSpec spec = parse_scene(R"({"cloth": {"type": "grid", "n": 16, "size": 0.06, "pins": "none"},
+                                     "material": "wool", "colliders": [{"type": "ground", "height": -0.01}]})",
+                                 "table.json");
+    spec.physics.solver = Solver::implicit;
+    spec.physics.air_drag = 0.0f;
+    spec.dt = 1.0f / 30.0f;
+    BuiltScene b = build_scene(spec);
+    Simulation sim(b.cloth, b.initial, b.params);
+    sim.step(30); // 1 s: it falls 1 cm and lies still
+    SimulationParams p = sim.params();
+    p.colliders.clear();
+    sim.set_params(p);
+    double v0 = 0.0, vy = 0.0;
+    for (std::size_t i = 0; i < b.cloth.particle_count; ++i) v0 += sim.velocity(i)[1];
+    sim.step(9);
+    for (std::size_t i = 0; i < b.cloth.particle_count; ++i) vy += sim.velocity(i)[1];
+    EXPECT_NEAR((vy - v0) / double(b.cloth.particle_count), -9.81 * 0.3, 0.02 * 9.81 * 0.3) << "table";
+}
+
 // A sheet pinned along its top edge has one equilibrium: the implicit solver must settle onto the explicit one's.
 TEST(Implicit, SettlesOnTheExplicitStaticEquilibrium) {
     HangParams hp = fabric_hang(32);

@@ -905,3 +905,17 @@ TEST(ViewSession, OutlineAndMaskScenesHaveTheCLIsMassesAndResolution) {
     m.advance();
     EXPECT_TRUE(m.sim().health().finite);
 }
+
+// The viewer shows the warning drape run prints when self-collision's thickness is above half the cloth's spacing
+// (the stage gets slow and pushes the cloth apart), once each time it starts to apply.
+TEST(ViewSession, ThickSelfCollisionIsWarnedAbout) {
+    ViewSession s(16, 1, std::nullopt); // 1 m hang at 16 x 16: spacing 6.7 cm
+    s.set_self_collision(0.01f);
+    EXPECT_EQ(s.message().text.find("self-collision's thickness"), std::string::npos) << s.message().text;
+    s.set_self_collision(0.05f);
+    EXPECT_EQ(s.params().self_collision.thickness, 0.05f);
+    EXPECT_EQ(s.message().level, MessageLevel::warning);
+    EXPECT_NE(s.message().text.find("self-collision's thickness (0.05 m) is above half the cloth's spacing"),
+              std::string::npos)
+        << s.message().text;
+}

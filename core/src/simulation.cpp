@@ -216,7 +216,9 @@ void Simulation::set_params(const SimulationParams& params) {
     const KernelPath kernel = resolve_params(params);
     // The last step's velocities stop being this solver's history only when the solver, dt or integrator changes (the
     // viewer sets parameters on any edit: a wind or friction change must not re-guess a resting cloth).
-    if (params.solver != params_.solver || params.dt != params_.dt || params.integrator != params_.integrator)
+    // A collider taken away may leave a cloth that rested on it held by nothing (as a pin let go, set_pinned).
+    if (params.solver != params_.solver || params.dt != params_.dt || params.integrator != params_.integrator ||
+        params.colliders.size() < params_.colliders.size())
         implicit_fresh_ = true;
     // A new integrator or dt changes what u, v, w mean (velocity, or displacement per step): convert them.
     if (params.integrator != params_.integrator || params.dt != params_.dt) {
@@ -265,6 +267,9 @@ void Simulation::set_pinned(std::size_t i, bool pinned) {
     }
     if (!pinned && inv_mass_free_[i] == 0.0f) return; // a particle with no known mass stays pinned
     rebaseline_ = true;
+    // A particle let go may leave its piece of cloth held by nothing: the implicit solver's next guess must not read
+    // the history of a cloth at rest (implicit_step.cpp's first-step rule).
+    if (!pinned && cloth_.inv_mass[i] == 0.0f) implicit_fresh_ = true;
     cloth_.inv_mass[i] = pinned ? 0.0f : inv_mass_free_[i];
     if (pinned) store_velocity(cur(), i, {}, params_.integrator, params_.dt);
 }
@@ -288,7 +293,10 @@ void Simulation::release_grab() noexcept {
     if (grabbed_ == SIZE_MAX) return;
     const std::size_t i = grabbed_;
     grabbed_ = SIZE_MAX;
-    if (!grabbed_was_pinned_) cloth_.inv_mass[i] = inv_mass_free_[i];
+    if (!grabbed_was_pinned_) {
+        cloth_.inv_mass[i] = inv_mass_free_[i];
+        implicit_fresh_ = true; // as when a pin is let go (set_pinned)
+    }
     rebaseline_ = true;
 }
 

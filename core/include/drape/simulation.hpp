@@ -308,7 +308,9 @@ class Simulation {
     std::array<StateBuffer, 2> buffers_;
     int current_ = 0;
     std::size_t steps_done_ = 0;
-    bool implicit_fresh_ = true; ///< no implicit step since construction or set_params (implicit_step.cpp's guess)
+    /// No implicit step since construction, a new solver, dt or integrator, a particle let go or a collider taken away
+    /// (implicit_step.cpp's first-step guess).
+    bool implicit_fresh_ = true;
     // Scratch for the staged pipeline: spring force (N) and external acceleration (m/s^2), sized at construction.
     AlignedArray<float> fx_, fy_, fz_, ax_, ay_, az_;
     std::vector<std::uint8_t> block_ok_; ///< per block: 1 when every value the block wrote is finite
