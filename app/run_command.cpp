@@ -150,6 +150,10 @@ int run_command(const RunOptions& o) {
     // A dt above the bound: the message names where it came from (the flag, or the scene file's field). The implicit
     // solver takes any step up to 0.1 s.
     if (!dt_default && !implicit) check_stability(scene.cloth, sp, o.dt ? std::string("--dt") : spec.source + ": physics.dt");
+    if (!dt_default && implicit && !(sp.dt >= implicit_min_dt))
+        throw InvalidInput((o.dt ? std::string("--dt") : spec.source + ": physics.dt") + ": " + format_dt(sp.dt) +
+                           " s is below the implicit solver's shortest step, 1e-4 s (a step's motion under gravity "
+                           "would be lost to the rounding of positions); use --solver explicit for steps that short");
 
     auto g = [](double v) {
         char buf[32];

@@ -93,6 +93,7 @@ expect_error "--strain-every: strain limiting is off" run --strain-every 3
 expect_error "--wind-strength: the wind is off" run --wind-strength 50
 expect_error "--kernel csr: a choice of the explicit solver" run --solver implicit --kernel csr --steps 1
 expect_error "--staged: a choice of the explicit solver" run --solver implicit --staged --steps 1
+expect_error "--dt: 1e-05 s is below the implicit solver's shortest step, 1e-4 s" run --solver implicit --dt 1e-5 --steps 1
 expect_error "but the multilevel guess is off (--single-level)" run --solver implicit --fas --single-level --steps 1
 expect_error "but this cloth has no coarse levels" run --scene tshirt --solver implicit --fas --steps 1
 

@@ -500,6 +500,11 @@ TEST(Implicit, ValidatesItsParameters) {
     EXPECT_THROW(Simulation(scene.cloth, scene.initial, p), InvalidInput);
     p.dt = 0.1f;
     EXPECT_NO_THROW(Simulation(scene.cloth, scene.initial, p));
+    // Below the shortest step a step's motion is lost to rounding (at 1e-9 s the cloth never moved).
+    p.dt = 0.5f * implicit_min_dt;
+    EXPECT_THROW(Simulation(scene.cloth, scene.initial, p), InvalidInput);
+    p.dt = implicit_min_dt;
+    EXPECT_NO_THROW(Simulation(scene.cloth, scene.initial, p));
 }
 
 // The SIMD sweeps give the scalar reference's bits (vbd::solve_vertex one vertex at a time): on the gathered slices
