@@ -190,6 +190,26 @@ std::string self_collision_thickness_warning(const Simulation& sim) {
     return buf;
 }
 
+std::string started_inside_warning(const Simulation& sim) {
+    // Deeper than half the collider's margin (and 10 um): a cloth resting on a collider (a saved state, a viewer
+    // rebuild) sits at the margin, within rounding.
+    std::size_t inside = 0;
+    const std::size_t n = sim.cloth().particle_count;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (sim.is_pinned(i)) continue;
+        for (const Collider& c : sim.params().colliders)
+            if (is_inside(c, {sim.x()[i], sim.y()[i], sim.z()[i]}, 0.5f * c.thickness + 1e-5f)) {
+                ++inside;
+                break;
+            }
+    }
+    if (inside == 0) return {};
+    return std::to_string(inside) + " of the cloth's " + std::to_string(sim.cloth().particle_count) +
+           " particles start inside a collider (deeper than half its thickness): the explicit solver holds each where it is "
+           "until the cloth's motion carries it out, the implicit solver pushes them out or stops; move the cloth or "
+           "the colliders";
+}
+
 std::string single_level_implicit_warning(const Simulation& sim) {
     if (sim.params().solver != Solver::implicit || sim.implicit_levels() != 1 || sim.cloth().particle_count < 256)
         return {};

@@ -60,6 +60,9 @@ void apply_solver_flags(SceneSpec& spec, const SolverFlags& flags);
 /// outlines, the springs model, non-square grids; 256 particles or more): such a cloth does not come to rest at
 /// ordinary sweep counts (docs/implicit.md). Empty when it does not apply. `drape run` and the viewer show it.
 std::string single_level_implicit_warning(const Simulation& sim);
+/// A warning when movable particles of the simulation's present state are inside a collider, deeper than half its
+/// thickness (the explicit collide stage holds them at rest there), else empty.
+std::string started_inside_warning(const Simulation& sim);
 /// A warning (or empty) when self-collision's thickness is above half the cloth's mean spring length: every particle
 /// then lies within the thickness of its neighbours' triangles, which makes the stage slow (the 64 x 64 pile at 0.05 m:
 /// ~1 s a substep, 935,447 contacts) and can push the cloth apart (the health monitor names it if so).

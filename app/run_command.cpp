@@ -188,7 +188,8 @@ int run_command(const RunOptions& o) {
     if (o.fas && sim.implicit_levels() == 1)
         throw InvalidInput("--fas: the coarse correction of the multilevel guess, but this cloth has no coarse levels "
                            "(only square grids of the fabric model, 10 x 10 and up, have them); drop --fas");
-    for (const std::string& w : {single_level_implicit_warning(sim), self_collision_thickness_warning(sim)})
+    for (const std::string& w : {single_level_implicit_warning(sim), self_collision_thickness_warning(sim),
+                                 started_inside_warning(sim)})
         if (!w.empty()) std::cerr << "drape run: warning: " << w << "\n";
     const std::size_t particles = sim.cloth().particle_count;
     std::unique_ptr<ObjExporter> exporter;

@@ -185,7 +185,7 @@ ViewSession::ViewSession(const std::string& scene, std::optional<std::uint32_t> 
     r.history = History::none;
     install(build(r.target, nullptr, false), r);
     message_ = {};
-    single_level_warned_ = thickness_warned_ = false;
+    single_level_warned_ = thickness_warned_ = inside_warned_ = false;
     warn_about_settings(); // the one message a start may show
     // An explicit --dt the cloth cannot take is refused (build() would quietly lower it).
     if (dt && params_.solver == Solver::explicit_euler && *dt > dt_bound_)
@@ -463,7 +463,7 @@ void ViewSession::install(Built built, const Request& r) {
     publisher_ = std::move(built.publisher);
     sim_ = std::move(built.sim);
     restore(built.snap);
-    if (r.new_scene) single_level_warned_ = thickness_warned_ = false;
+    if (r.new_scene) single_level_warned_ = thickness_warned_ = inside_warned_ = false;
     warn_about_settings();
     ++generation_;
     if (r.new_scene) ++scene_generation_;
@@ -634,6 +634,7 @@ void ViewSession::warn_about_settings() {
     };
     check(sim_ ? single_level_implicit_warning(*sim_) : std::string(), single_level_warned_);
     check(sim_ ? self_collision_thickness_warning(*sim_) : std::string(), thickness_warned_);
+    check(sim_ ? started_inside_warning(*sim_) : std::string(), inside_warned_);
     if (!text.empty()) post(MessageLevel::warning, text);
 }
 

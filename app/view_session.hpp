@@ -371,11 +371,13 @@ class ViewSession {
     bool commit_params(const SimulationParams& p, const std::string& key);
     /// Sets the simulation's run parameters and keeps them (params_); a refusal is posted. No undo entry.
     bool try_set_params(const SimulationParams& p);
-    /// Posts single_level_implicit_warning and self_collision_thickness_warning (materials.hpp) once each time each
-    /// starts to apply (a new cloth, the implicit solver chosen for one, a thickness set).
+    /// Posts single_level_implicit_warning, self_collision_thickness_warning and started_inside_warning
+    /// (materials.hpp) once each time each starts to apply (a new cloth, the implicit solver chosen for one, a
+    /// thickness set).
     void warn_about_settings();
     bool single_level_warned_ = false;
     bool thickness_warned_ = false;
+    bool inside_warned_ = false;
     void refresh_pins();
     /// The settings of a scene as loaded, at `size` (throws InvalidInput for a size out of range).
     Snapshot settings_for(SceneSpec spec, std::optional<std::uint32_t> size);

@@ -621,6 +621,25 @@ TEST(Implicit, SingleLevelClothsAreWarnedAbout) {
     EXPECT_NE(off.find("switched off"), std::string::npos) << "the user's own choice, named as such: " << off;
 }
 
+// A cloth placed inside a collider is warned about (the explicit solver holds such particles at rest: a sweep found
+// whole cloths frozen, reported healthy); one resting on a collider at its margin is not.
+TEST(Implicit, ClothStartingInsideAColliderIsWarnedAbout) {
+    auto warning = [](float height) {
+        // The ground's thickness is 5 mm; the cloth lies at y = 0.
+        const SceneSpec spec = parse_scene(R"({"cloth": {"type": "grid", "n": 8, "size": 0.2, "pins": "none"},
+                                               "material": "wool", "colliders": [{"type": "ground", "height": )" +
+                                               std::to_string(height) + "}]}",
+                                           "inside.json");
+        BuiltScene b = build_scene(spec);
+        const Simulation sim(std::move(b.cloth), b.initial, b.params);
+        return drape::app::started_inside_warning(sim);
+    };
+    EXPECT_NE(warning(0.1f).find("64 of the cloth's 64 particles start inside a collider"), std::string::npos)
+        << warning(0.1f);
+    EXPECT_TRUE(warning(-0.005f).empty()) << "resting at the margin: " << warning(-0.005f);
+    EXPECT_TRUE(warning(-0.1f).empty());
+}
+
 // --single-level / physics.implicit.multilevel false / the viewer's checkbox: the steps solve the cloth's own grid
 // only, and switching it back on (set_params, as the viewer does) brings the coarse levels back.
 TEST(Implicit, MultilevelGuessCanBeSwitchedOff) {
