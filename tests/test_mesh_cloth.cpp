@@ -284,6 +284,15 @@ TEST(MeshCloth, ParseObjMeshDirectly) {
     EXPECT_EQ(m.cleaning_note(), "");
 }
 
+TEST(MeshCloth, ByteOrderMarkIsNotPartOfTheFirstLine) {
+    const TriangleMesh m = parse_obj_mesh("\xEF\xBB\xBFv 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nf 1 2 3\n", "bom.obj");
+    ASSERT_EQ(m.particle_count(), 3u); // vertex 4 is in no triangle
+    EXPECT_EQ(m.x[0], 0.0);
+    EXPECT_EQ(m.x[1], 1.0);
+    EXPECT_EQ(m.z[2], 1.0);
+    EXPECT_NEAR(m.area(), 0.5, 1e-12);
+}
+
 TEST(MeshCloth, TooManyVerticesAreRefusedBeforeParsing) {
     // The limit is 16,777,216; a test file that size would be 134 MB, so the same check runs with a limit of 3.
     const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";

@@ -163,6 +163,9 @@ std::string TriangleMesh::cleaning_note() const {
 }
 
 TriangleMesh parse_obj_mesh(const std::string& text, const std::string& source, std::size_t max_vertices) {
+    // A UTF-8 byte order mark (some editors write one) is not part of the first line: read with it, the first "v"
+    // line was dropped and every face index pointed one vertex on.
+    if (text.rfind("\xEF\xBB\xBF", 0) == 0) return parse_obj_mesh(text.substr(3), source, max_vertices);
     PrePass pre = pre_pass(text, source, std::min(max_vertices, mesh_max_vertices));
 
     tinyobj::attrib_t attrib;
