@@ -232,7 +232,7 @@ int main(int argc, char** argv) {
     view_cmd->add_option("--camera-yaw", view.camera_yaw_deg,
                          "Camera angle around the vertical, degrees: 0 looks from +z (a garment's front), 90 from +x, "
                          "180 from behind [default: the scene's view, front-right]")
-        ->check(CLI::Range(-360.0f, 360.0f))
+        ->check(in_range<float>(-360.0f, 360.0f, " degrees")) // CLI::Range let NaN through
         ->option_text("DEG:[-360, 360]");
     // Hidden automation hooks (documentation screenshots and tests).
     view_cmd->add_flag("--panels-open", view.panels_open, "Expand every panel")->group("");

@@ -185,7 +185,8 @@ expect_error "--single-level: a flag of the implicit solver, but the solver is e
 expect_error "--integrator: verlet is a choice of the explicit solver only" run --solver implicit --integrator verlet
 expect_error "--iterations: value 5000 is outside the allowed range [1, 1000]" view --iterations 5000
 expect_error "--solver: rk4 not in {explicit,implicit}" view --solver rk4
-expect_error "--camera-yaw: Value 400 not in range" view --camera-yaw 400
+expect_error "--camera-yaw: value 400 is outside the allowed range [-360, 360] degrees" view --camera-yaw 400
+expect_error "--camera-yaw: 'nan' is not a number" view --camera-yaw nan
 echo '{"physics": {"solver": "implicit", "integrator": "verlet"}}' >"$tmpdir/implicit_verlet.json"
 echo '{"physics": {"solver": "implicit", "implicit": {"chebyshev_rho": 1}}}' >"$tmpdir/implicit_rho.json"
 expect_error "implicit_verlet.json: physics.integrator = \"verlet\" is a choice of the explicit solver only" \
