@@ -515,6 +515,16 @@ TEST(SceneWrite, SaveIsAtomicAndFailuresNameThePath) {
         EXPECT_TRUE(has(e.what(), never) && has(e.what(), "would not load back") && has(e.what(), "cloth.mass")) << e.what();
     }
     EXPECT_FALSE(std::filesystem::exists(never));
+    // Saving through a symbolic link writes the file it points to and keeps the link.
+    std::filesystem::create_directory(dir / "real");
+    const std::filesystem::path real = dir / "real" / "target.json", link = dir / "link.json";
+    save_scene(real.string(), load_scene("hang"));
+    std::filesystem::create_symlink(real, link);
+    save_scene(link.string(), spec);
+    EXPECT_TRUE(std::filesystem::is_symlink(link));
+    expect_same_spec(spec, load_scene(real.string()), "saved through the link");
+    for (const auto& entry : std::filesystem::directory_iterator(dir / "real"))
+        EXPECT_FALSE(has(entry.path().filename().string(), ".tmp-")) << "no temp file left: " << entry.path();
     std::filesystem::remove_all(dir);
 }
 

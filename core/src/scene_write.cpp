@@ -340,7 +340,14 @@ std::string to_json(const SceneSpec& s, const SceneState* state, const std::file
 std::string scene_to_json(const SceneSpec& spec, const SceneState* state) { return to_json(spec, state, {}); }
 
 void save_scene(const std::string& path, const SceneSpec& spec, const SceneState* state) {
-    const std::filesystem::path target(path);
+    // Through a symbolic link: the file it points to is written (renaming over the link replaced the link with a
+    // file and left its target as it was); messages keep the name the user gave.
+    std::filesystem::path target(path);
+    std::error_code ec;
+    if (std::filesystem::is_symlink(target, ec)) {
+        const std::filesystem::path resolved = std::filesystem::weakly_canonical(target, ec);
+        if (!ec) target = resolved;
+    }
     const std::filesystem::path dir = target.parent_path();
     const std::string text = to_json(spec, state, dir.empty() ? std::filesystem::path(".") : dir);
     try {
@@ -349,7 +356,7 @@ void save_scene(const std::string& path, const SceneSpec& spec, const SceneState
         throw InvalidInput(path + ": not written, the scene would not load back: " + e.what());
     }
     // Temp file beside the target (same file system, so rename is atomic), then rename over it.
-    std::string tmp = path + ".tmp-XXXXXX";
+    std::string tmp = target.string() + ".tmp-XXXXXX";
     const int fd = ::mkstemp(tmp.data());
     if (fd < 0) throw std::runtime_error(path + ": cannot write the scene file (" + std::strerror(errno) + ")");
     std::size_t done = 0;
@@ -370,7 +377,7 @@ void save_scene(const std::string& path, const SceneSpec& spec, const SceneState
         throw std::runtime_error(path + ": cannot write the scene file (" + why + ")");
     }
     ::chmod(tmp.c_str(), 0644);
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    if (std::rename(tmp.c_str(), target.c_str()) != 0) {
         const std::string why = std::strerror(errno);
         ::unlink(tmp.c_str());
         throw std::runtime_error(path + ": cannot write the scene file (" + why + ")");
