@@ -111,11 +111,20 @@ TEST_P(BrokenScene, GivesAClearError) {
     EXPECT_TRUE(has(msg, c.expect)) << c.name << ": " << msg;
 }
 
+TEST(Scene, NulByteIsRefused) {
+    const std::string text = std::string("{}") + '\0' + R"({"cloth": {"n": 1e400}})";
+    ASSERT_EQ(text.size(), 26u);
+    const std::string msg = scene_error_of(text);
+    EXPECT_TRUE(has(msg, "byte 2 is a NUL character")) << msg;
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Files, BrokenScene,
     ::testing::Values(
         BadFile{"malformed", "{\"scene\": \"x\", ", "malformed JSON"},
         BadFile{"not_object", "[1, 2]", "must be a JSON object"},
+        // A repeated key kept only the last value; a NUL byte ended the text (the rest was ignored).
+        BadFile{"duplicate_key", R"({"cloth": {"n": 10, "n": 20}})", "cloth.n appears twice in one object"},
         BadFile{"wrong_type", R"({"cloth": {"n": "ten"}})", "cloth.n must be a whole number in [2, 4096]"},
         BadFile{"fraction", R"({"cloth": {"n": 10.5}})", "cloth.n"},
         BadFile{"unknown_field", R"({"cloth": {"n": 10, "colour": 3}})", "cloth.colour is not a known field"},

@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <cstring>
 #include <map>
+#include <unordered_set>
 #include <set>
 #include <sstream>
 
@@ -79,11 +80,16 @@ class PathTrackingParser {
     bool string(string_t& v) { return value(dom_.string(v)); }
     bool binary(binary_t& v) { return value(dom_.binary(v)); }
     bool start_object(std::size_t n) {
-        frames_.push_back({false, 0, {}});
+        frames_.push_back({false, 0, {}, {}});
         return dom_.start_object(n);
     }
     bool key(string_t& k) {
         frames_.back().key = k;
+        // A key given twice in one object: nlohmann keeps the last, which would silently drop the first value.
+        if (!frames_.back().keys.insert(k).second) {
+            duplicate_path = path();
+            return false;
+        }
         return dom_.key(k);
     }
     bool end_object() {
@@ -91,7 +97,7 @@ class PathTrackingParser {
         return value(dom_.end_object());
     }
     bool start_array(std::size_t n) {
-        frames_.push_back({true, 0, {}});
+        frames_.push_back({true, 0, {}, {}});
         return dom_.start_array(n);
     }
     bool end_array() {
@@ -126,12 +132,14 @@ class PathTrackingParser {
     std::size_t error_position = 0;
     int error_id = 0;
     std::string error_token, error_message, error_path;
+    std::string duplicate_path; ///< set when a key appears twice in one object (the parse stops there)
 
   private:
     struct Frame {
         bool array;
         std::size_t index;
         std::string key;
+        std::unordered_set<std::string> keys; ///< an object's keys so far
     };
     /// After a value (scalar or closed container): the next array element has the next index.
     bool value(bool ok) {
@@ -199,10 +207,16 @@ std::string printable(const std::string& s, std::size_t max_chars) {
 /// Parses JSON text, turning non-finite numbers into null and recording them (at most 32: past that, the first one
 /// is reported without its field's range). Any other error is "malformed JSON" naming where it is.
 json parse_json(std::string text, const std::string& source, NonFiniteNumbers& non_finite) {
+    // The JSON reader takes a NUL byte for the end of the text: what follows one would be silently ignored.
+    if (const std::size_t nul = text.find('\0'); nul != std::string::npos)
+        throw InvalidInput(source + ": byte " + std::to_string(nul) + " is a NUL character (a scene file is JSON text)");
     for (int attempt = 0;; ++attempt) {
         json doc;
         PathTrackingParser parser(doc);
         if (json::sax_parse(text, &parser)) return doc;
+        if (!parser.duplicate_path.empty())
+            throw InvalidInput(source + ": " + printable(parser.duplicate_path, 160) +
+                               " appears twice in one object (each key once)");
         const auto [begin, end] = non_finite_token(text, parser);
         if (begin == end) {
             std::string where = parser.error_path.empty() ? "" : " (near " + printable(parser.error_path, 160) + ")";
