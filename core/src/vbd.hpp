@@ -280,7 +280,11 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
         }
         return e;
     };
-    for (int halving = 0; halving < vbd_line_search_halvings && change(ddx, ddy, ddz) > 0.0f; ++halving) {
+    // A step that is not finite (a singular Hessian in float: found with stretch 1e6 N/m across 10 N/m and shear
+    // 0.01) is no step; a change that is not finite counts as a rise (NaN > 0 is false: it was taken).
+    const float sum_dd = ddx + ddy + ddz;
+    if (!(sum_dd - sum_dd == 0.0f)) ddx = ddy = ddz = 0.0f;
+    for (int halving = 0; halving < vbd_line_search_halvings && !(change(ddx, ddy, ddz) <= 0.0f); ++halving) {
         ddx *= 0.5f;
         ddy *= 0.5f;
         ddz *= 0.5f;

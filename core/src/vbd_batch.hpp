@@ -176,9 +176,16 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
         }
         return e;
     };
+    // As the scalar solve_vertex: a step that is not finite is no step (lanes outside the cloth too: their Hessian is
+    // 0), a change that is not finite counts as a rise.
+    const fbatch sum_dd = ddx + ddy + ddz;
+    const fmask finite = (sum_dd - sum_dd) == zero;
+    ddx = simd::select(finite, ddx, zero);
+    ddy = simd::select(finite, ddy, zero);
+    ddz = simd::select(finite, ddz, zero);
     fmask searching(true);
     for (int halving = 0; halving < vbd_line_search_halvings; ++halving) {
-        searching = searching & (change(ddx, ddy, ddz) > zero);
+        searching = searching & !(change(ddx, ddy, ddz) <= zero);
         if (!xsimd::any(searching)) break;
         const fbatch half(0.5f);
         ddx = simd::select(searching, ddx * half, ddx);
