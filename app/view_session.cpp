@@ -834,6 +834,7 @@ void ViewSession::restore_run_state(const SimulationParams& old_params,
     try {
         SimulationParams safe = sim_->params();
         safe.dt = std::min(safe.dt, old_params.dt);
+        if (safe.solver == Solver::implicit) safe.dt = std::max(safe.dt, implicit_min_dt);
         sim_->set_params(safe);
         for (std::size_t k = 0; k < spring_kind_count; ++k)
             sim_->set_material(static_cast<SpringKind>(k), old_materials[k]);
@@ -1348,13 +1349,15 @@ void ViewSession::apply_settings(const Snapshot& target, History history) {
     const std::array<SpringMaterial, spring_kind_count> new_materials = materials(target.fabric);
     const SimulationParams old_params = sim_->params();
     try {
+        // (The implicit solver takes no step below implicit_min_dt, and needs no smaller one to stay stable.)
         SimulationParams p = old_params;
         p.dt = std::min(old_params.dt, target.params.dt);
+        if (p.solver == Solver::implicit) p.dt = std::max(p.dt, implicit_min_dt);
         sim_->set_params(p);
         for (std::size_t k = 0; k < spring_kind_count; ++k)
             sim_->set_material(static_cast<SpringKind>(k), new_materials[k]);
         SimulationParams q = target.params;
-        q.dt = p.dt;
+        q.dt = q.solver == Solver::implicit ? std::max(p.dt, implicit_min_dt) : p.dt;
         sim_->set_params(q);
         sim_->set_params(target.params);
     } catch (const InvalidInput& e) {

@@ -3,6 +3,8 @@
 // healthy; the monitor's figures do not depend on the thread count.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -84,6 +86,36 @@ TEST(HealthMonitor, StrainTriggerFiresAndBlamesTheStrainLimit) {
     EXPECT_NE(msg.find("strain limit"), std::string::npos) << msg;
     EXPECT_EQ(c.monitor.figures().strain_bound, 1.0f);
     EXPECT_GT(c.monitor.figures().max_strain, 1.0f);
+}
+
+// Gravity's work grows as a failing cloth stretches downwards, and the energy balance's strain bound with it (a 4 m
+// ribbon reached strain 1,328 reported healthy). No cloth stretches to 11 times its length by itself.
+TEST(HealthMonitor, StrainCeilingHoldsWhateverGravitySupplies) {
+    auto check = [](float factor, HealthFigures& figures) {
+        HangParams hp; // 1 m, 100 x 100, 0.1 kg, k = 1000 N/m, hanging from y = 0 downwards
+        hp.plane = GridPlane::vertical;
+        SceneBuild scene = build_hang_scene(hp);
+        const Simulation sim(std::move(scene.cloth), scene.initial, drape::testing::default_params(scene.cloth));
+        HealthMonitor monitor;
+        monitor.init(sim.cloth(), sim.params());
+        monitor.rebaseline<false>(sim.cloth(), sim.params(), sim.state(), 0);
+        StateBuffer s = copy_state(sim);
+        const float top = *std::max_element(s.y.begin(), s.y.end()); // positions are relative to the centre
+        for (std::size_t i = 0; i < sim.cloth().particle_count; ++i) s.y[i] = top + factor * (s.y[i] - top);
+        const std::string msg = monitor.check<false>(sim.cloth(), sim.params(), s, 32);
+        figures = monitor.figures();
+        return msg;
+    };
+    HealthFigures f;
+    // 12 times as long: gravity's work (5.4 J) would allow a single spring strain 32 by the energy balance.
+    const std::string msg = check(12.0f, f);
+    EXPECT_NE(msg.find("max structural strain"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("the most a cloth stretches"), std::string::npos) << msg;
+    EXPECT_EQ(f.strain_bound, 10.0f) << f.energy_bound << " J, strain " << f.max_strain;
+    EXPECT_GT(f.max_strain, 10.0f);
+    // Twice as long: within the ceiling (what the energy balance says of it is its own matter).
+    const std::string ok = check(2.0f, f);
+    EXPECT_EQ(ok.find("the most a cloth stretches"), std::string::npos) << ok;
 }
 
 TEST(HealthMonitor, SpeedTriggerFires) {

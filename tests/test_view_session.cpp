@@ -708,7 +708,7 @@ TEST(ViewSessionImplicit, SwitchingSolversKeepsEachDtAndThePace) {
     // Undo returns to the implicit solver and its step.
     s.end_edit();
     s.undo();
-    EXPECT_EQ(s.solver(), Solver::implicit);
+    EXPECT_EQ(s.solver(), Solver::implicit) << s.message().text; // the intermediate dt was refused (implicit_min_dt)
     EXPECT_FLOAT_EQ(s.params().dt, static_cast<float>(view_implicit_max_dt));
     EXPECT_EQ(s.advance(), 1u);
 }

@@ -61,6 +61,8 @@ class HealthMonitor {
     static constexpr std::size_t check_every = 128; ///< substeps between checks (a check costs ~2.6 substeps)
     static constexpr double energy_factor = 10.0;
     static constexpr double speed_factor = 10.0;
+    /// The largest structural strain a healthy cloth reaches without a grab (or twice its start's, if more).
+    static constexpr double strain_ceiling = 10.0;
 
     /// Sizes the scratch (the only allocation) and records the scene's constants.
     void init(const Cloth& cloth, const SimulationParams& params);
@@ -98,6 +100,7 @@ class HealthMonitor {
     // Baseline.
     double ke_b_ = 0.0, elastic_b_ = 0.0, mass_b_ = 0.0, cx_b_ = 0.0, cy_b_ = 0.0, cz_b_ = 0.0;
     float speed_b_ = 0.0f, diagonal_b_ = 0.0f, speed_elastic_ = 0.0f;
+    double strain_b_ = 0.0; ///< max structural strain at the baseline
     double wind_work_ = 0.0, ke_last_ = 0.0;
     std::size_t step_last_ = 0;
     // Scene constants.
