@@ -271,6 +271,10 @@ TEST(MeshCloth, BrokenObjFilesGiveOneClearLine) {
     EXPECT_TRUE(has(load_error(bad_pins), "cloth.pins = \"corners\" is not one of \"none\", \"top\"")) << load_error(bad_pins);
     const std::string bad_scale = write_file("bad_scale.json", mesh_scene("tri.obj", R"(, "scale": 0)"));
     EXPECT_TRUE(has(load_error(bad_scale), "cloth.scale")) << load_error(bad_scale);
+    // "top" on a mesh lying flat and level would pin every vertex (nothing would move).
+    write_file("flat.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 3\n");
+    const std::string flat = write_file("flat.json", mesh_scene("flat.obj", R"(, "pins": "top")"));
+    EXPECT_TRUE(has(load_error(flat), "cloth.pins = \"top\" would pin every particle of this mesh (all 3")) << load_error(flat);
 }
 
 TEST(MeshCloth, ParseObjMeshDirectly) {

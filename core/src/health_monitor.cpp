@@ -309,7 +309,7 @@ std::string HealthMonitor::check(const Cloth& cloth, const SimulationParams& par
     else if (implicit)
         msg << "the implicit sweeps not converging at this step (dt = " << params.dt << " s, "
             << params.implicit.iterations << " iterations): raise the iterations or lower dt";
-    else if (dt_bound_ > 0.0 && params.dt > 0.9 * dt_bound_)
+    else if (dt_bound_ > 0.0 && params.dt > 0.9 * dt_bound_ * (1.0 + 1e-5)) // the default dt is 0.9 x, rounded
         msg << "dt too close to the stability bound (dt = " << params.dt << " s, bound " << dt_bound_
             << " s): use a smaller dt (the default is 0.9 x the bound)";
     else if (params.aero.enabled)

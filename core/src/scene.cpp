@@ -1494,8 +1494,15 @@ BuiltScene build_scene_body(const SceneSpec& s) {
                                "cloth.scale");
         std::vector<float> inv_mass = a.inverse_masses();
         const std::vector<float> free_inv_mass = inv_mass;
-        if (m.pins == MeshPins::top)
-            for (std::uint32_t i : mesh_top_particles(*m.mesh)) inv_mass[i] = 0.0f;
+        if (m.pins == MeshPins::top) {
+            const std::vector<std::uint32_t> top = mesh_top_particles(*m.mesh);
+            // A mesh lying flat and level has every vertex at its top: nothing would move.
+            if (top.size() == a.particle_count())
+                throw InvalidInput(s.source + ": cloth.pins = \"top\" would pin every particle of this mesh (all " +
+                                   std::to_string(top.size()) + " are at its top: it lies flat and level); use "
+                                   "\"none\", a list of vertex indices, or stand the mesh up");
+            for (std::uint32_t i : top) inv_mass[i] = 0.0f;
+        }
         for (std::uint32_t v : m.pin_vertices) inv_mass[static_cast<std::size_t>(m.mesh->particle_of_vertex.at(v))] = 0.0f;
         // An OBJ's edges need not follow any weave: the unaligned membrane (triangle_fabric.hpp); u = the file's x.
         cook_assembly(s, a, inv_mass, free_inv_mass, out, {1.0f, 0.0f, 0.0f}, WeaveAlignment::unaligned);
