@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
     steps->excludes(secs);
     cmd->add_option("--dt", run.dt,
                     "Explicit substep or implicit step in seconds (default: explicit 0.9 x the stability bound, "
-                    "above it refused; implicit a frame, 1/30 s, any step up to 0.1 s)")
+                    "above it refused; implicit a frame, 1/30 s, any step from 1e-4 s up to 0.1 s)")
         ->check(in_range<double>(1e-9, 0.1, " s"));
     cmd->add_option("--integrator", run.integrator,
                     "Time integrator of the explicit solver: euler or verlet [default: the scene's]")

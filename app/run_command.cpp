@@ -148,7 +148,7 @@ int run_command(const RunOptions& o) {
     const StabilityBound bound = stability_bound(scene.cloth, sp);
     const bool dt_default = !spec.dt.has_value();
     // A dt above the bound: the message names where it came from (the flag, or the scene file's field). The implicit
-    // solver takes any step up to 0.1 s.
+    // solver takes any step from 1e-4 s up to 0.1 s.
     if (!dt_default && !implicit) check_stability(scene.cloth, sp, o.dt ? std::string("--dt") : spec.source + ": physics.dt");
     if (!dt_default && implicit && !(sp.dt >= implicit_min_dt))
         throw InvalidInput((o.dt ? std::string("--dt") : spec.source + ": physics.dt") + ": " + format_dt(sp.dt) +

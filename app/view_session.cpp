@@ -186,7 +186,7 @@ ViewSession::ViewSession(const std::string& scene, std::optional<std::uint32_t> 
     install(build(r.target, nullptr, false), r);
     message_ = {};
     single_level_warned_ = thickness_warned_ = inside_warned_ = false;
-    warn_about_settings(); // the one message a start may show
+    warn_about_settings(true); // the one message a start may show
     // An explicit --dt the cloth cannot take is refused (build() would quietly lower it).
     if (dt && params_.solver == Solver::explicit_euler && *dt > dt_bound_)
         throw InvalidInput("--dt: value " + fmt(*dt) + " s is above this cloth's explicit stability bound " +
@@ -464,7 +464,7 @@ void ViewSession::install(Built built, const Request& r) {
     sim_ = std::move(built.sim);
     restore(built.snap);
     if (r.new_scene) single_level_warned_ = thickness_warned_ = inside_warned_ = false;
-    warn_about_settings();
+    warn_about_settings(r.new_scene);
     ++generation_;
     if (r.new_scene) ++scene_generation_;
     if (r.clears_error) {
@@ -621,11 +621,11 @@ bool ViewSession::try_set_params(const SimulationParams& p) {
         return false;
     }
     params_ = p;
-    warn_about_settings();
+    warn_about_settings(false);
     return true;
 }
 
-void ViewSession::warn_about_settings() {
+void ViewSession::warn_about_settings(bool new_cloth) {
     // Each warning is posted once when it starts to apply; two starting together share the message line.
     std::string text;
     auto check = [&](const std::string& w, bool& warned) {
@@ -634,7 +634,9 @@ void ViewSession::warn_about_settings() {
     };
     check(sim_ ? single_level_implicit_warning(*sim_) : std::string(), single_level_warned_);
     check(sim_ ? self_collision_thickness_warning(*sim_) : std::string(), thickness_warned_);
-    check(sim_ ? started_inside_warning(*sim_) : std::string(), inside_warned_);
+    // Only for a cloth just built: mid-run, particles held in the crevices between overlapping colliders are not
+    // a cloth placed inside one.
+    if (new_cloth) check(sim_ ? started_inside_warning(*sim_) : std::string(), inside_warned_);
     if (!text.empty()) post(MessageLevel::warning, text);
 }
 
@@ -1174,7 +1176,7 @@ void ViewSession::set_multilevel(bool on) {
     p.implicit.multilevel = on;
     commit_params(p, "multilevel guess");
     single_level_warned_ = false;
-    warn_about_settings();
+    warn_about_settings(false);
 }
 
 void ViewSession::set_iteration_budget(bool on) {
@@ -1350,15 +1352,15 @@ void ViewSession::apply_settings(const Snapshot& target, History history) {
     const SimulationParams old_params = sim_->params();
     try {
         // (The implicit solver takes no step below implicit_min_dt, and needs no smaller one to stay stable.)
-        SimulationParams p = old_params;
-        p.dt = std::min(old_params.dt, target.params.dt);
-        if (p.solver == Solver::implicit) p.dt = std::max(p.dt, implicit_min_dt);
-        sim_->set_params(p);
+        const float smaller = std::min(old_params.dt, target.params.dt);
+        auto intermediate = [&](SimulationParams s) {
+            s.dt = s.solver == Solver::implicit ? std::max(smaller, implicit_min_dt) : smaller;
+            return s;
+        };
+        sim_->set_params(intermediate(old_params));
         for (std::size_t k = 0; k < spring_kind_count; ++k)
             sim_->set_material(static_cast<SpringKind>(k), new_materials[k]);
-        SimulationParams q = target.params;
-        q.dt = q.solver == Solver::implicit ? std::max(p.dt, implicit_min_dt) : p.dt;
-        sim_->set_params(q);
+        sim_->set_params(intermediate(target.params));
         sim_->set_params(target.params);
     } catch (const InvalidInput& e) {
         restore_run_state(old_params, old_materials);

@@ -373,8 +373,8 @@ class ViewSession {
     bool try_set_params(const SimulationParams& p);
     /// Posts single_level_implicit_warning, self_collision_thickness_warning and started_inside_warning
     /// (materials.hpp) once each time each starts to apply (a new cloth, the implicit solver chosen for one, a
-    /// thickness set).
-    void warn_about_settings();
+    /// thickness set); the last only for a new scene (`new_cloth`).
+    void warn_about_settings(bool new_cloth);
     bool single_level_warned_ = false;
     bool thickness_warned_ = false;
     bool inside_warned_ = false;

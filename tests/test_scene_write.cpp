@@ -525,6 +525,17 @@ TEST(SceneWrite, SaveIsAtomicAndFailuresNameThePath) {
     expect_same_spec(spec, load_scene(real.string()), "saved through the link");
     for (const auto& entry : std::filesystem::directory_iterator(dir / "real"))
         EXPECT_FALSE(has(entry.path().filename().string(), ".tmp-")) << "no temp file left: " << entry.path();
+    // A mesh scene saved through the link loads through the link: its OBJ path is relative to the link's directory,
+    // as load_scene reads it. A dangling link is written through too.
+    const SceneSpec disc = load_scene(std::string(DRAPE_SOURCE_DIR) + "/scenes/examples/mesh_disc.json");
+    save_scene(link.string(), disc);
+    EXPECT_TRUE(std::filesystem::is_symlink(link));
+    expect_same_spec(disc, load_scene(link.string()), "mesh scene through the link");
+    const std::filesystem::path dangling = dir / "dangling.json", absent = dir / "real" / "absent.json";
+    std::filesystem::create_symlink(absent, dangling);
+    save_scene(dangling.string(), spec);
+    EXPECT_TRUE(std::filesystem::is_symlink(dangling));
+    expect_same_spec(spec, load_scene(absent.string()), "written where the dangling link points");
     std::filesystem::remove_all(dir);
 }
 

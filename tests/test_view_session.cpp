@@ -919,3 +919,21 @@ TEST(ViewSession, ThickSelfCollisionIsWarnedAbout) {
               std::string::npos)
         << s.message().text;
 }
+
+// Undo and redo across the solvers when the explicit substep is below the implicit solver's shortest step (1e-4 s):
+// the intermediate parameters of the undo take each solver's own smaller dt (a review found the undo refused).
+TEST(ViewSessionImplicit, UndoAcrossSolversWithATinyExplicitDt) {
+    ViewSession s(64, 1, std::nullopt);
+    ASSERT_LT(s.params().dt, implicit_min_dt) << "the case needs an explicit dt below 1e-4 s";
+    const float explicit_dt = s.params().dt;
+    s.set_solver(Solver::implicit);
+    ASSERT_EQ(s.solver(), Solver::implicit);
+    s.end_edit();
+    s.undo();
+    EXPECT_EQ(s.solver(), Solver::explicit_euler) << s.message().text;
+    EXPECT_EQ(s.params().dt, explicit_dt);
+    s.redo();
+    EXPECT_EQ(s.solver(), Solver::implicit) << s.message().text;
+    EXPECT_EQ(s.advance(), 1u);
+    EXPECT_TRUE(s.sim().health().finite);
+}

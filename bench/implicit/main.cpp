@@ -80,7 +80,7 @@ int main(int argc, char** argv) {
                 pos = comma + 1;
             }
         }
-        else if (s == "--dt") opt.dt = static_cast<float>(number("--dt", value(), 1e-5, 0.1));
+        else if (s == "--dt") opt.dt = static_cast<float>(number("--dt", value(), 1e-4, 0.1));
         else if (s == "--iterations") opt.iterations = static_cast<std::uint32_t>(number("--iterations", value(), 1, 1000));
         else if (s == "--rho") {
             opt.rho = static_cast<float>(number("--rho", value(), 0, 0.999));

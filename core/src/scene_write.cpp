@@ -340,15 +340,20 @@ std::string to_json(const SceneSpec& s, const SceneState* state, const std::file
 std::string scene_to_json(const SceneSpec& spec, const SceneState* state) { return to_json(spec, state, {}); }
 
 void save_scene(const std::string& path, const SceneSpec& spec, const SceneState* state) {
-    // Through a symbolic link: the file it points to is written (renaming over the link replaced the link with a
-    // file and left its target as it was); messages keep the name the user gave.
-    std::filesystem::path target(path);
+    // Through a symbolic link (a chain of them, a dangling one): the file it points to is written (renaming over the
+    // link replaced the link with a file and left its target as it was). Relative paths in the file stay relative
+    // to the name the user gave, as load_scene reads them; messages keep that name.
+    const std::filesystem::path given(path);
+    std::filesystem::path target = given;
     std::error_code ec;
-    if (std::filesystem::is_symlink(target, ec)) {
-        const std::filesystem::path resolved = std::filesystem::weakly_canonical(target, ec);
-        if (!ec) target = resolved;
+    for (int hops = 0; hops < 40 && std::filesystem::is_symlink(target, ec); ++hops) {
+        const std::filesystem::path to = std::filesystem::read_symlink(target, ec);
+        if (ec) break;
+        target = to.is_absolute() ? to : target.parent_path() / to;
     }
-    const std::filesystem::path dir = target.parent_path();
+    if (std::filesystem::is_symlink(target, ec))
+        throw std::runtime_error(path + ": cannot write the scene file (a loop of symbolic links)");
+    const std::filesystem::path dir = given.parent_path();
     const std::string text = to_json(spec, state, dir.empty() ? std::filesystem::path(".") : dir);
     try {
         (void)parse_scene(text, path, dir.string());

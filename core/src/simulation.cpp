@@ -2,6 +2,7 @@
 #include "drape/simulation.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <string>
 
@@ -74,10 +75,13 @@ void validate_params(const SimulationParams& p) {
         if (p.integrator != Integrator::symplectic_euler)
             throw InvalidInput("integrator 'verlet' is a choice of the explicit solver only; the implicit solver keeps "
                                "velocities (use integrator 'euler' with solver 'implicit')");
-        if (!(p.dt >= implicit_min_dt))
-            throw InvalidInput("dt = " + std::to_string(p.dt) + " s is below the implicit solver's shortest step, 1e-4 s "
+        if (!(p.dt >= implicit_min_dt)) {
+            char dt[32];
+            std::snprintf(dt, sizeof dt, "%.4g", double(p.dt));
+            throw InvalidInput("dt = " + std::string(dt) + " s is below the implicit solver's shortest step, 1e-4 s "
                                "(its motion under gravity would be lost to the rounding of positions); use the explicit "
                                "solver for steps that short");
+        }
         check(p.implicit.iterations >= 1 && p.implicit.iterations <= 1000, "implicit iterations", p.implicit.iterations,
               "[1, 1000]");
         check(std::isfinite(p.implicit.tolerance) && p.implicit.tolerance >= 0.0f && p.implicit.tolerance <= 1.0f,

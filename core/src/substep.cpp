@@ -263,7 +263,10 @@ template <bool Parallel> void Simulation::contact_substeps() {
         std::uint32_t frame_iterations;
         ~Restore() { dt = frame, iterations = frame_iterations; }
     } restore{params_.dt, params_.dt, params_.implicit.iterations, params_.implicit.iterations};
-    const std::uint32_t k = params_.self_collision.substeps;
+    // No sub-step below the implicit solver's shortest step (its motion would be lost to rounding).
+    const std::uint32_t k = std::max<std::uint32_t>(
+        1, std::min<std::uint32_t>(params_.self_collision.substeps,
+                                   static_cast<std::uint32_t>(restore.frame / implicit_min_dt)));
     const double start = step_time_;
     params_.dt = restore.frame / float(k);
     // A sub-step of dt / K is better conditioned than the frame (the inertia term grows like K^2) and starts nearer its

@@ -23,7 +23,7 @@ namespace drape {
 /// Which solver advances the cloth.
 enum class Solver : std::uint8_t {
     explicit_euler, ///< the seeds' explicit substeps (SimulationParams::integrator), dt below the stability bound
-    implicit,       ///< backward Euler by vertex block descent, any dt up to 0.1 s
+    implicit,       ///< backward Euler by vertex block descent, any dt from implicit_min_dt up to 0.1 s
 };
 const char* solver_name(Solver solver) noexcept; ///< "explicit" / "implicit"
 
