@@ -128,27 +128,41 @@ TEST(Implicit, MirrorTwinsAreColouredTogether) {
     EXPECT_TRUE(vbd::mirror_twins(x, b.initial.y, b.initial.z).empty());
 }
 
+namespace {
+
+/// A 4 x 4 wool mask of 2 cm cells (a small stiff mesh, no coarse levels).
+constexpr const char* small_mask = R"({"cloth": {"type": "mask", "panels": [{"name": "a", "cell_size": 0.02,
+                                      "rows": ["1111", "1111", "1111", "1111"]}]}, "material": "wool"})";
+
+/// A scene file's cloth under the implicit solver at h = 1/30 s with air drag kr.
+BuiltScene implicit_scene(const std::string& text, float air_drag) {
+    SceneSpec spec = parse_scene(text, "scene.json");
+    spec.physics.solver = Solver::implicit;
+    spec.physics.air_drag = air_drag;
+    spec.dt = 1.0f / 30.0f;
+    return build_scene(spec);
+}
+
+/// The mean vertical velocity of the particles, m/s.
+double mean_vy(const Simulation& sim) {
+    double vy = 0.0;
+    for (std::size_t i = 0; i < sim.cloth().particle_count; ++i) vy += sim.velocity(i)[1];
+    return vy / double(sim.cloth().particle_count);
+}
+
+} // namespace
+
 // A piece of cloth that nothing holds falls freely from rest: its first step takes all of gravity into the guess.
 // From the zero history (s = 0) a stiff little mesh never fell: the sweeps move a stiff cloth as a whole by a
 // vertex-sized amount per sweep, and the next step's guess took that as the particles' acceleration (a 4 x 4 wool
 // mask of 2 cm cells: 0.036 m/s after 0.3 s; a 32 x 32 grid of 6 cm single level: 0.048 m/s; free fall 2.94).
 TEST(Implicit, UnheldClothFallsFreely) {
-    for (const char* scene : {R"({"cloth": {"type": "mask", "panels": [{"name": "a", "cell_size": 0.02,
-                                  "rows": ["1111", "1111", "1111", "1111"]}]}, "material": "wool"})",
-                              R"({"cloth": {"type": "grid", "n": 32, "size": 0.06, "pins": "none"}, "material": "wool",
-                                  "physics": {"drag": 0}})"}) {
-        SceneSpec spec = parse_scene(scene, "fall.json");
-        spec.physics.solver = Solver::implicit;
-        spec.physics.implicit.multilevel = false;
-        spec.physics.air_drag = 0.0f;
-        spec.dt = 1.0f / 30.0f;
-        BuiltScene b = build_scene(spec);
+    for (const char* scene : {small_mask, R"({"cloth": {"type": "grid", "n": 32, "size": 0.06, "pins": "none"},
+                                              "material": "wool", "physics": {"implicit": {"multilevel": false}}})"}) {
+        BuiltScene b = implicit_scene(scene, 0.0f);
         Simulation sim(b.cloth, b.initial, b.params);
         sim.step(9); // 0.3 s
-        double vy = 0.0;
-        for (std::size_t i = 0; i < b.cloth.particle_count; ++i) vy += sim.velocity(i)[1];
-        vy /= double(b.cloth.particle_count);
-        EXPECT_NEAR(vy, -9.81 * 0.3, 0.02 * 9.81 * 0.3) << scene;
+        EXPECT_NEAR(mean_vy(sim), -9.81 * 0.3, 0.02 * 9.81 * 0.3) << scene;
     }
 }
 
@@ -157,24 +171,15 @@ TEST(Implicit, UnheldClothFallsFreely) {
 // drag (and reads the last step's acceleration less the drag's, or a cloth at its terminal velocity would read as held):
 // without either a 4 x 4 wool mask fell through its terminal velocity.
 TEST(Implicit, FallingMeshReachesItsTerminalVelocity) {
-    SceneSpec spec = parse_scene(R"({"cloth": {"type": "mask", "panels": [{"name": "a", "cell_size": 0.02,
-                                     "rows": ["1111", "1111", "1111", "1111"]}]}, "material": "wool"})",
-                                 "drag.json");
-    spec.physics.solver = Solver::implicit;
-    spec.physics.air_drag = 2.0f;
-    spec.dt = 1.0f / 30.0f;
-    BuiltScene b = build_scene(spec);
+    BuiltScene b = implicit_scene(small_mask, 2.0f);
     Simulation sim(b.cloth, b.initial, b.params);
     const double kr = 2.0, h = 1.0 / 30.0, g = 9.81;
     std::size_t done = 0;
     for (const std::size_t steps : {15u, 45u, 90u}) {
         sim.step(steps - done);
         done = steps;
-        double vy = 0.0;
-        for (std::size_t i = 0; i < b.cloth.particle_count; ++i) vy += sim.velocity(i)[1];
-        vy /= double(b.cloth.particle_count);
         const double want = -g / kr * (1.0 - std::pow(1.0 + h * kr, -double(steps)));
-        EXPECT_NEAR(vy, want, 0.01 * std::fabs(want)) << steps << " steps";
+        EXPECT_NEAR(mean_vy(sim), want, 0.01 * std::fabs(want)) << steps << " steps";
     }
 }
 
@@ -205,13 +210,7 @@ TEST(Implicit, NearlySingularFabricNeverGoesNonFinite) {
 // rest, and read as before (s = 0) a stiff little mesh fell at a few per cent of g.
 TEST(Implicit, ClothLetGoLaterFallsFreely) {
     for (const bool by_grab : {false, true}) {
-        SceneSpec spec = parse_scene(R"({"cloth": {"type": "mask", "panels": [{"name": "a", "cell_size": 0.02,
-                                         "rows": ["1111", "1111", "1111", "1111"]}]}, "material": "wool"})",
-                                     "hold.json");
-        spec.physics.solver = Solver::implicit;
-        spec.physics.air_drag = 0.0f;
-        spec.dt = 1.0f / 30.0f;
-        BuiltScene b = build_scene(spec);
+        BuiltScene b = implicit_scene(small_mask, 0.0f);
         Simulation sim(b.cloth, b.initial, b.params);
         if (by_grab)
             sim.grab(0, {sim.x()[0], sim.y()[0], sim.z()[0]});
@@ -222,31 +221,22 @@ TEST(Implicit, ClothLetGoLaterFallsFreely) {
             sim.release_grab();
         else
             sim.set_pinned(0, false);
-        double v0 = 0.0, vy = 0.0;
-        for (std::size_t i = 0; i < b.cloth.particle_count; ++i) v0 += sim.velocity(i)[1];
+        const double v0 = mean_vy(sim);
         sim.step(9); // 0.3 s
-        for (std::size_t i = 0; i < b.cloth.particle_count; ++i) vy += sim.velocity(i)[1];
-        const double n = double(b.cloth.particle_count);
-        EXPECT_NEAR((vy - v0) / n, -9.81 * 0.3, 0.02 * 9.81 * 0.3) << (by_grab ? "grab" : "pin");
+        EXPECT_NEAR(mean_vy(sim) - v0, -9.81 * 0.3, 0.02 * 9.81 * 0.3) << (by_grab ? "grab" : "pin");
     }
     // A cloth lying on a table that is taken away.
-    SceneSpec spec = parse_scene(R"({"cloth": {"type": "grid", "n": 16, "size": 0.06, "pins": "none"},
-                                     "material": "wool", "colliders": [{"type": "ground", "height": -0.01}]})",
-                                 "table.json");
-    spec.physics.solver = Solver::implicit;
-    spec.physics.air_drag = 0.0f;
-    spec.dt = 1.0f / 30.0f;
-    BuiltScene b = build_scene(spec);
+    BuiltScene b = implicit_scene(R"({"cloth": {"type": "grid", "n": 16, "size": 0.06, "pins": "none"},
+                                      "material": "wool", "colliders": [{"type": "ground", "height": -0.01}]})",
+                                  0.0f);
     Simulation sim(b.cloth, b.initial, b.params);
     sim.step(30); // 1 s: it falls 1 cm and lies still
     SimulationParams p = sim.params();
     p.colliders.clear();
     sim.set_params(p);
-    double v0 = 0.0, vy = 0.0;
-    for (std::size_t i = 0; i < b.cloth.particle_count; ++i) v0 += sim.velocity(i)[1];
+    const double v0 = mean_vy(sim);
     sim.step(9);
-    for (std::size_t i = 0; i < b.cloth.particle_count; ++i) vy += sim.velocity(i)[1];
-    EXPECT_NEAR((vy - v0) / double(b.cloth.particle_count), -9.81 * 0.3, 0.02 * 9.81 * 0.3) << "table";
+    EXPECT_NEAR(mean_vy(sim) - v0, -9.81 * 0.3, 0.02 * 9.81 * 0.3) << "table";
 }
 
 // A sheet pinned along its top edge has one equilibrium: the implicit solver must settle onto the explicit one's.
