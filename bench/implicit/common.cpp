@@ -20,6 +20,12 @@ BuiltScene hang_scene(std::uint32_t n) {
     return build_scene(spec);
 }
 
+BuiltScene scene_at(const std::string& scene, std::uint32_t n) {
+    SceneSpec spec = load_scene(scene);
+    set_scene_resolution(spec, n, "--n");
+    return build_scene(spec);
+}
+
 SimulationParams implicit_params(const SimulationParams& base, float dt, std::uint32_t iterations, float rho,
                                  ImplicitMethod method, float strain_limit, bool multilevel, bool fas) {
     SimulationParams p = base;

@@ -19,11 +19,13 @@ struct Options {
     int threads = 2;
     bool json = false;
     std::vector<std::uint32_t> sizes;      ///< --n (repeatable or comma list)
+    std::string scene = "hang";            ///< --scene (rest): a built-in scene or a scene file; --n its resolution
     float dt = 1.0f / 30.0f;               ///< --dt implicit step, s
     std::uint32_t iterations = 30;         ///< --iterations per implicit step
     float rho = 0.9f;                      ///< --rho Chebyshev spectral radius estimate (0 = off)
     float strain_limit = 0.0f;             ///< --strain-limit ratio for the implicit run (0 = off)
     bool multilevel = true;                ///< --single-level turns the implicit solver's multilevel guess off
+    bool explicit_rest = false;            ///< --explicit-rest: rest also runs the explicit solver (the equilibrium)
     bool fas = false;                      ///< --fas: the multilevel guess's coarse correction (ImplicitParams::fas)
     std::optional<double> duration;        ///< --duration s: realtime's timed run (default 2), rest's run (default 8)
     double settle_time = 10.0;             ///< --settle-time s, the settled shape
@@ -44,6 +46,9 @@ struct Options {
 
 /// The built-in hang scene (scenes/hang.json: wool, 2 cm clips) at n x n particles; dt = the explicit default.
 BuiltScene hang_scene(std::uint32_t n);
+/// A built-in scene or scene file at resolution n (set_scene_resolution: grid particles per side, outline and T-shirt
+/// cells per metre).
+BuiltScene scene_at(const std::string& scene, std::uint32_t n);
 
 /// A new simulation of sim's cloth starting from its current positions and velocities, with params (Simulation is
 /// move-only; the implicit solver's memory of the previous step - its adaptive initial guess - starts afresh).

@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "usage: drape_implicit realtime|convergence|throughput|rest [--n N,..] [--threads T] [--json] "
                              "[--dt S] [--iterations K] [--rho R] [--strain-limit R] [--single-level] [--fas] [--duration S] [--settle-time S] "
                              "[--explicit-budget S] [--explicit-settle-budget S] [--explicit-short S] [--newton-max-n N] [--newton-step-max-n N] [--newton-iterations K] [--ref-iterations K] [--ref-steps S] [--ref-drag D] "
-                             "[--kmax K] [--csv FILE | --out DIR] [--json-out FILE]\n");
+                             "[--kmax K] [--csv FILE | --out DIR] [--json-out FILE] [--scene S] [--explicit-rest] (rest)\n");
         return 2;
     }
     const std::string cmd = argv[1];
@@ -102,6 +102,8 @@ int main(int argc, char** argv) {
         else if (s == "--ref-iterations")
             opt.ref_iterations = static_cast<std::uint32_t>(number("--ref-iterations", value(), 1, 1000));
         else if (s == "--kmax") opt.kmax = static_cast<std::uint32_t>(number("--kmax", value(), 1, 1000));
+        else if (s == "--scene") opt.scene = value();
+        else if (s == "--explicit-rest") opt.explicit_rest = true;
         else if (s == "--single-level") opt.multilevel = false;
         else if (s == "--fas") opt.fas = true;
         else if (s == "--csv") opt.csv = value();

@@ -1,5 +1,5 @@
-// The implicit solver's state (owned by Simulation): the sweeps of the cloth itself and, for a grid cloth of the
-// fabric model, a hierarchy of the same fabric on coarser grids that gives each step a coarse-to-fine initial guess
+// The implicit solver's state (owned by Simulation): the sweeps of the cloth itself and, for a cloth of the fabric
+// model that can be rebuilt coarser (a grid, an outline), a hierarchy of the same fabric at coarser spacings that gives each step a coarse-to-fine initial guess
 // (docs/implicit.md, "Multilevel initial guess").
 #pragma once
 
@@ -7,15 +7,17 @@
 #include <vector>
 
 #include "drape/cloth.hpp"
+#include "drape/level_transfer.hpp"
 #include "vbd.hpp"
 
 namespace drape {
 
-/// One coarser grid of the same fabric (Cloth::coarsen), with its own state for the current step.
+/// One coarser copy of the same fabric (Cloth::coarsen), with its own state for the current step.
 struct CoarseLevel {
     Cloth cloth;
     vbd::Solver solver;
-    std::uint32_t columns = 0, rows = 0;
+    LevelTransfer from_fine; ///< the cloth's particles onto this level's nodes
+    LevelTransfer to_finer;  ///< this level onto the next finer one (the cloth itself for the first)
     std::vector<float> x0, y0, z0;    ///< x^n, sampled from the cloth's state
     std::vector<float> vx, vy, vz;    ///< v^n, sampled (then the collide pass's scratch)
     std::vector<float> gx, gy, gz;    ///< the cloth's own initial guess, sampled (fixed nodes: x^n)
@@ -32,7 +34,6 @@ struct CoarseLevel {
 struct ImplicitSolver {
     vbd::Solver fine;
     std::vector<CoarseLevel> coarse; ///< finer first
-    std::uint32_t columns = 0, rows = 0; ///< the cloth's grid (when it has coarse levels)
     std::vector<float> corr_x, corr_y, corr_z; ///< the finest coarse level's correction, sampled onto the cloth
     std::vector<float> res_x, res_y, res_z;    ///< the cloth's force residual at x^n (N); then gradient scratch
     std::vector<double> block_dot;             ///< per block of particles: a partial dot product

@@ -40,8 +40,6 @@ std::uint32_t Simulation::implicit_levels() const noexcept {
 
 namespace {
 
-/// Coarse levels stop below this many particles per side.
-constexpr std::uint32_t coarsest_side = 5;
 /// The most sweeps a coarse level runs per step (or twice the fine sweeps where that is more: a step asked to
 /// converge fully gets a converged guess). Each level runs twice the sweeps of the next finer one, up to this:
 /// more sweeps on a 5 x 5 .. 40 x 40 copy of the cloth solve that copy's own problem better, and its shape (its clips
@@ -50,57 +48,33 @@ constexpr std::uint32_t coarsest_side = 5;
 /// and 60 gave 3.09e-3; at N = 100, 1.21e-2 / 1.25e-2 / 1.67e-2 / 2.96e-2 (docs/implicit.md, "Coarse sweeps").
 constexpr std::uint32_t coarse_iterations_max = 240;
 
-/// Bilinear sample of a columns x rows grid array at fractional node coordinates (fi, fj).
-inline float sample(const float* a, std::uint32_t columns, std::uint32_t rows, float fi, float fj) noexcept {
-    const std::uint32_t i0 = std::min(static_cast<std::uint32_t>(fi), columns - 2);
-    const std::uint32_t j0 = std::min(static_cast<std::uint32_t>(fj), rows - 2);
-    const float s = fi - float(i0), t = fj - float(j0);
-    const std::size_t k = std::size_t(j0) * columns + i0;
-    const float top = a[k] + s * (a[k + 1] - a[k]);
-    const float bottom = a[k + columns] + s * (a[k + columns + 1] - a[k + columns]);
-    return top + t * (bottom - top);
-}
+/// A coarser copy is kept only if it has at most this share of the next finer one's particles (a cloth whose
+/// rebuild hardly thins it, such as an outline already at its outline's own sampling, stops there) and at least
+/// coarsest_particles.
+constexpr double coarse_share_max = 0.7;
+constexpr std::size_t coarsest_particles = 16;
 
-/// The grid coordinate on a grid of `from` nodes of node `i` of a grid of `to` nodes over the same side.
-inline float map_node(std::uint32_t i, std::uint32_t to, std::uint32_t from) noexcept {
-    return float(i) * float(from - 1) / float(to - 1);
-}
-
-/// For every node of a (tc x tr) grid: out = sample of src - sample of base (or of src alone) at the node.
+/// out[k] = the transfer of src (less base, when given) onto target node k (LevelTransfer), per node in parallel.
 template <bool Parallel>
-void resample(const float* src, const float* base, std::uint32_t sc, std::uint32_t sr, float* out, std::uint32_t tc,
-              std::uint32_t tr) {
-    for_each_index<Parallel>(tr, [&](std::size_t j) {
-        const float fj = map_node(static_cast<std::uint32_t>(j), tr, sr);
-        for (std::uint32_t i = 0; i < tc; ++i) {
-            const float fi = map_node(i, tc, sc);
-            float v = sample(src, sc, sr, fi, fj);
-            if (base) v -= sample(base, sc, sr, fi, fj);
-            out[j * tc + i] = v;
+void transfer(const LevelTransfer& t, const float* src, const float* base, float* out) {
+    const std::size_t count = t.size();
+    for_each_index<Parallel>((count + block_particles - 1) / block_particles, [&](std::size_t blk) {
+        for (std::size_t k = blk * block_particles, end = std::min(count, (blk + 1) * block_particles); k < end; ++k) {
+            const std::array<std::uint32_t, 4>& i = t.index[k];
+            const std::array<float, 4>& w = t.weight[k];
+            float v = w[0] * src[i[0]] + w[1] * src[i[1]] + w[2] * src[i[2]] + w[3] * src[i[3]];
+            if (base) v -= w[0] * base[i[0]] + w[1] * base[i[1]] + w[2] * base[i[2]] + w[3] * base[i[3]];
+            out[k] = v;
         }
     });
 }
 
-/// The transpose of resample (no base): out (sc x sr) = the sum over the nodes of a (tc x tr) grid of each node's
-/// value times the bilinear weight its sample gives each node of out. Serial, in node order.
-void restrict_to(const float* src, std::uint32_t tc, std::uint32_t tr, float* out, std::uint32_t sc, std::uint32_t sr) {
-    std::fill(out, out + std::size_t(sc) * sr, 0.0f);
-    for (std::uint32_t j = 0; j < tr; ++j) {
-        const float fj = map_node(j, tr, sr);
-        const std::uint32_t j0 = std::min(static_cast<std::uint32_t>(fj), sr - 2);
-        const float t = fj - float(j0);
-        for (std::uint32_t i = 0; i < tc; ++i) {
-            const float fi = map_node(i, tc, sc);
-            const std::uint32_t i0 = std::min(static_cast<std::uint32_t>(fi), sc - 2);
-            const float s = fi - float(i0);
-            const float v = src[std::size_t(j) * tc + i];
-            const std::size_t k = std::size_t(j0) * sc + i0;
-            out[k] += v * (1.0f - s) * (1.0f - t);
-            out[k + 1] += v * s * (1.0f - t);
-            out[k + sc] += v * (1.0f - s) * t;
-            out[k + sc + 1] += v * s * t;
-        }
-    }
+/// The transpose of transfer (no base): out (out_count source nodes) = the sum over the target nodes of each one's
+/// value times the weight its transfer gives each source node. Serial, in node order.
+void transfer_transpose(const LevelTransfer& t, const float* src, float* out, std::size_t out_count) {
+    std::fill(out, out + out_count, 0.0f);
+    for (std::size_t k = 0; k < t.size(); ++k)
+        for (std::size_t c = 0; c < 4; ++c) out[t.index[k][c]] += src[k] * t.weight[k][c];
 }
 
 } // namespace
@@ -128,17 +102,22 @@ void Simulation::cook_implicit() {
     solver->fine.cook(cloth_, cloth_.grid ? std::vector<std::uint32_t>{}
                                           : vbd::mirror_twins({now.x.data(), n}, {now.y.data(), n}, {now.z.data(), n}));
     if (!edge_rest_.empty()) solver->fine.set_spring_rest(edge_rest_); // seams being sewn (sewing.cpp)
-    // Coarse levels: a square grid cloth that can rebuild its fabric on coarser grids.
-    if (cloth_.coarsen && cloth_.grid && cloth_.grid->columns == cloth_.grid->rows && cloth_.grid->columns >= 2 * coarsest_side) {
-        solver->columns = solver->rows = cloth_.grid->columns;
-        for (std::uint32_t n = (cloth_.grid->columns + 1) / 2; n >= coarsest_side; n = (n + 1) / 2) {
-            CoarseLevel level;
-            level.cloth = cloth_.coarsen(n);
-            if (!level.cloth.grid || level.cloth.grid->columns != n || level.cloth.particle_count != std::size_t(n) * n)
+    // Coarse levels: a cloth that can rebuild its fabric at a coarser spacing (Cloth::coarsen: grids, outlines).
+    if (cloth_.coarsen) {
+        std::size_t finer_count = cloth_.particle_count;
+        for (std::uint32_t k = 1;; ++k) {
+            std::optional<CoarseCloth> copy = cloth_.coarsen(k);
+            if (!copy) break;
+            const std::size_t count = copy->cloth.particle_count;
+            if (count < coarsest_particles || double(count) > coarse_share_max * double(finer_count) ||
+                copy->from_fine.size() != count || copy->to_finer.size() != finer_count)
                 break;
-            level.columns = level.rows = n;
+            finer_count = count;
+            CoarseLevel level;
+            level.cloth = std::move(copy->cloth);
+            level.from_fine = std::move(copy->from_fine);
+            level.to_finer = std::move(copy->to_finer);
             level.solver.cook(level.cloth);
-            const std::size_t count = level.cloth.particle_count;
             for (std::vector<float>* a : {&level.x0, &level.y0, &level.z0, &level.vx, &level.vy, &level.vz, &level.gx,
                                           &level.gy, &level.gz, &level.x, &level.y, &level.z, &level.inv_mass,
                                           &level.rx, &level.ry, &level.rz, &level.tx, &level.ty, &level.tz})
@@ -149,19 +128,15 @@ void Simulation::cook_implicit() {
                                       ? level.cloth.free_inv_mass
                                       : std::vector<float>(level.cloth.inv_mass.begin(),
                                                            level.cloth.inv_mass.begin() + std::ptrdiff_t(count));
-            level.nearest.resize(count);
-            const std::uint32_t fc = solver->columns;
-            for (std::uint32_t j = 0; j < n; ++j)
-                for (std::uint32_t i = 0; i < n; ++i)
-                    level.nearest[std::size_t(j) * n + i] =
-                        static_cast<std::uint32_t>(std::lround(map_node(j, n, fc))) * fc +
-                        static_cast<std::uint32_t>(std::lround(map_node(i, n, fc)));
+            level.nearest = level.from_fine.nearest();
             solver->coarse.push_back(std::move(level));
         }
-        for (std::vector<float>* a : {&solver->corr_x, &solver->corr_y, &solver->corr_z, &solver->res_x,
-                                      &solver->res_y, &solver->res_z})
-            a->assign(cloth_.particle_count, 0.0f);
-        solver->block_dot.assign(cloth_.block_count(), 0.0);
+        if (!solver->coarse.empty()) {
+            for (std::vector<float>* a : {&solver->corr_x, &solver->corr_y, &solver->corr_z, &solver->res_x,
+                                          &solver->res_y, &solver->res_z})
+                a->assign(cloth_.particle_count, 0.0f);
+            solver->block_dot.assign(cloth_.block_count(), 0.0);
+        }
     }
     implicit_ = std::move(solver);
 }
@@ -171,7 +146,6 @@ template <bool Parallel> void Simulation::multilevel_guess() {
     ImplicitSolver& is = *implicit_;
     const StateBuffer& a = buffers_[current_];
     StateBuffer& b = buffers_[1 - current_];
-    const std::uint32_t fc = is.columns, fr = is.rows;
     const float h = params_.dt, h2 = h * h;
     const std::array<float, 3> g = gravity_now();
     const float gx = g[0], gy = g[1], gz = g[2];
@@ -200,33 +174,33 @@ template <bool Parallel> void Simulation::multilevel_guess() {
         });
         for (std::size_t l = 0; l < is.coarse.size(); ++l) {
             CoarseLevel& L = is.coarse[l];
-            const std::uint32_t tc = l == 0 ? fc : is.coarse[l - 1].columns, tr = l == 0 ? fr : is.coarse[l - 1].rows;
+            const std::size_t count = L.cloth.particle_count;
             const float* sx = l == 0 ? rx : is.coarse[l - 1].rx.data();
             const float* sy = l == 0 ? ry : is.coarse[l - 1].ry.data();
             const float* sz = l == 0 ? rz : is.coarse[l - 1].rz.data();
-            restrict_to(sx, tc, tr, L.rx.data(), L.columns, L.rows);
-            restrict_to(sy, tc, tr, L.ry.data(), L.columns, L.rows);
-            restrict_to(sz, tc, tr, L.rz.data(), L.columns, L.rows);
+            transfer_transpose(L.to_finer, sx, L.rx.data(), count);
+            transfer_transpose(L.to_finer, sy, L.ry.data(), count);
+            transfer_transpose(L.to_finer, sz, L.rz.data(), count);
         }
     }
     for (std::size_t l = is.coarse.size(); l-- > 0;) {
         CoarseLevel& L = is.coarse[l];
-        const std::uint32_t n = L.columns;
         const std::size_t count = L.cloth.particle_count;
-        resample<Parallel>(a.x.data(), nullptr, fc, fr, L.x0.data(), n, n);
-        resample<Parallel>(a.y.data(), nullptr, fc, fr, L.y0.data(), n, n);
-        resample<Parallel>(a.z.data(), nullptr, fc, fr, L.z0.data(), n, n);
-        resample<Parallel>(a.u.data(), nullptr, fc, fr, L.vx.data(), n, n);
-        resample<Parallel>(a.v.data(), nullptr, fc, fr, L.vy.data(), n, n);
-        resample<Parallel>(a.w.data(), nullptr, fc, fr, L.vz.data(), n, n);
-        resample<Parallel>(b.x.data(), nullptr, fc, fr, L.gx.data(), n, n);
-        resample<Parallel>(b.y.data(), nullptr, fc, fr, L.gy.data(), n, n);
-        resample<Parallel>(b.z.data(), nullptr, fc, fr, L.gz.data(), n, n);
+        const LevelTransfer& from_fine = L.from_fine;
+        transfer<Parallel>(from_fine, a.x.data(), nullptr, L.x0.data());
+        transfer<Parallel>(from_fine, a.y.data(), nullptr, L.y0.data());
+        transfer<Parallel>(from_fine, a.z.data(), nullptr, L.z0.data());
+        transfer<Parallel>(from_fine, a.u.data(), nullptr, L.vx.data());
+        transfer<Parallel>(from_fine, a.v.data(), nullptr, L.vy.data());
+        transfer<Parallel>(from_fine, a.w.data(), nullptr, L.vz.data());
+        transfer<Parallel>(from_fine, b.x.data(), nullptr, L.gx.data());
+        transfer<Parallel>(from_fine, b.y.data(), nullptr, L.gy.data());
+        transfer<Parallel>(from_fine, b.z.data(), nullptr, L.gz.data());
         if (l + 1 < is.coarse.size()) { // the next coarser level's correction of the guess
             const CoarseLevel& C = is.coarse[l + 1];
-            resample<Parallel>(C.x.data(), C.gx.data(), C.columns, C.rows, L.x.data(), n, n);
-            resample<Parallel>(C.y.data(), C.gy.data(), C.columns, C.rows, L.y.data(), n, n);
-            resample<Parallel>(C.z.data(), C.gz.data(), C.columns, C.rows, L.z.data(), n, n);
+            transfer<Parallel>(C.to_finer, C.x.data(), C.gx.data(), L.x.data());
+            transfer<Parallel>(C.to_finer, C.y.data(), C.gy.data(), L.y.data());
+            transfer<Parallel>(C.to_finer, C.z.data(), C.gz.data(), L.z.data());
         } else {
             std::fill(L.x.begin(), L.x.end(), 0.0f);
             std::fill(L.y.begin(), L.y.end(), 0.0f);
@@ -298,9 +272,9 @@ template <bool Parallel> void Simulation::multilevel_guess() {
     float* cx = is.corr_x.data();
     float* cy = is.corr_y.data();
     float* cz = is.corr_z.data();
-    resample<Parallel>(C.x.data(), C.gx.data(), C.columns, C.rows, cx, fc, fr);
-    resample<Parallel>(C.y.data(), C.gy.data(), C.columns, C.rows, cy, fc, fr);
-    resample<Parallel>(C.z.data(), C.gz.data(), C.columns, C.rows, cz, fc, fr);
+    transfer<Parallel>(C.to_finer, C.x.data(), C.gx.data(), cx);
+    transfer<Parallel>(C.to_finer, C.y.data(), C.gy.data(), cy);
+    transfer<Parallel>(C.to_finer, C.z.data(), C.gz.data(), cz);
     const std::size_t n = cloth_.particle_count;
     auto add = [&](float scale) {
         for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {

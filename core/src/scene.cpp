@@ -2,6 +2,8 @@
 // file and the JSON path) and cooking a SceneSpec into a cloth plus simulation parameters.
 #include "drape/scene.hpp"
 
+#include "drape/level_transfer.hpp"
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -23,6 +25,7 @@
 
 #include "drape/bending.hpp"
 #include "drape/errors.hpp"
+#include "drape/level_transfer.hpp"
 #include "drape/stability.hpp"
 #include "drape/triangle_fabric.hpp"
 
@@ -1405,6 +1408,101 @@ void apply_state(const SceneState& st, BuiltScene& out) {
 } // namespace
 
 namespace {
+
+/// cloth.type = "outline": the panel (and its sewn copy) at the spec's spacing, pinned along the top when asked.
+void build_outline_cloth(const SceneSpec& s, BuiltScene& out) {
+    const OutlineClothSpec& o = s.outline;
+    double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
+    for (const auto& v : o.outline.outline)
+        for (int k = 0; k < 2; ++k) lo[k] = std::min(lo[k], v[k]), hi[k] = std::max(hi[k], v[k]);
+    const float cu = float(0.5 * (lo[0] + hi[0])), cv = float(0.5 * (lo[1] + hi[1]));
+    // Panel frame: u along +x; v along +z (horizontal) or -y (vertical); the normal u x v is -y or -z.
+    PanelFrame frame;
+    frame.axis_v = o.plane == GridPlane::horizontal ? std::array{0.0f, 0.0f, 1.0f} : std::array{0.0f, -1.0f, 0.0f};
+    const std::array<float, 3> normal = o.plane == GridPlane::horizontal ? std::array{0.0f, -1.0f, 0.0f}
+                                                                       : std::array{0.0f, 0.0f, -1.0f};
+    const float half_gap = o.copy ? 0.5f * o.gap : 0.0f;
+    // Positions relative to o.centre, the frame's origin (Cloth::origin, set below).
+    for (int k = 0; k < 3; ++k)
+        frame.origin[k] = -cu * frame.axis_u[k] - cv * frame.axis_v[k] - half_gap * normal[k];
+    OutlinePanelParams op;
+    op.spacing = o.spacing;
+    op.areal_density = s.model == MaterialModel::fabric ? s.fabric.density : o.density;
+    GarmentAssembly a;
+    // Panel errors the file could not be checked for before triangulating (an outline too thin for its
+    // spacing) name the file and the fields.
+    const auto panel = [&](const PanelFrame& f) {
+        try {
+            return add_outline_panel(a, o.outline, op, f);
+        } catch (const InvalidInput& e) {
+            throw InvalidInput((s.source.empty() ? std::string("scene") : s.source) + ": cloth.outline at cloth.spacing = " +
+                               format_number(o.spacing) + " m: " + e.what());
+        }
+    };
+    const OutlinePanelBuild front = panel(frame);
+    if (o.copy) {
+        PanelFrame back = frame;
+        for (int k = 0; k < 3; ++k) back.origin[k] += 2.0f * half_gap * normal[k];
+        const OutlinePanelBuild rear = panel(back);
+        for (const auto& [from, to] : o.sew) {
+            const OutlineStretch stretch{from, to, false};
+            sew_by_arc_length(a, outline_stretch_particles(front, stretch), outline_stretch_particles(rear, stretch),
+                              o.seam_rest_ratio * o.spacing);
+        }
+    }
+    std::vector<float> inv_mass = a.inverse_masses();
+    const std::vector<float> free_inv_mass = inv_mass;
+    if (o.pin_top) { // the particles along the top (vertical) or the far edge (horizontal: largest z)
+        const bool vertical = o.plane == GridPlane::vertical;
+        float top = -1e30f;
+        for (std::size_t i = 0; i < a.particle_count(); ++i) top = std::max(top, vertical ? a.y[i] : a.z[i]);
+        for (std::size_t i = 0; i < a.particle_count(); ++i)
+            if ((vertical ? a.y[i] : a.z[i]) >= top - 0.25f * o.spacing) inv_mass[i] = 0.0f;
+    }
+    cook_assembly(s, a, inv_mass, free_inv_mass, out);
+    out.cloth.origin = {double(o.centre[0]), double(o.centre[1]), double(o.centre[2])};
+}
+
+/// An outline cloth of the fabric model rebuilds itself at 2^level times its spacing for the implicit solver's coarse
+/// levels (Cloth::coarsen). Both copies lie flat where they were built, so the maps between them are taken there: the
+/// closest point on the other copy's triangles (surface_transfer); the cloth's own flat layout is kept for it.
+void set_outline_coarsen(const SceneSpec& s, BuiltScene& out) {
+    if (s.model != MaterialModel::fabric) return;
+    struct Layout {
+        std::vector<float> x, y, z;
+        std::vector<std::uint32_t> triangles;
+    };
+    auto fine = std::make_shared<const Layout>(Layout{out.initial.x, out.initial.y, out.initial.z, out.cloth.triangles});
+    out.cloth.coarsen = [s, fine](std::uint32_t level) -> std::optional<CoarseCloth> {
+        if (level == 0 || level > 16) return std::nullopt;
+        const auto build = [&](std::uint32_t k) -> std::optional<BuiltScene> {
+            SceneSpec c = s;
+            c.outline.spacing = s.outline.spacing * float(1u << k);
+            c.outline.seam_rest_ratio = s.outline.seam_rest_ratio / float(1u << k); // the seams' own rest length
+            try {
+                BuiltScene b;
+                build_outline_cloth(c, b);
+                return b;
+            } catch (const InvalidInput&) { // too coarse for the outline: no such level
+                return std::nullopt;
+            }
+        };
+        std::optional<BuiltScene> coarse = build(level);
+        if (!coarse) return std::nullopt;
+        std::optional<BuiltScene> finer;
+        if (level > 1 && !(finer = build(level - 1))) return std::nullopt;
+        const std::vector<float>& fx = finer ? finer->initial.x : fine->x;
+        const std::vector<float>& fy = finer ? finer->initial.y : fine->y;
+        const std::vector<float>& fz = finer ? finer->initial.z : fine->z;
+        const InitialState& c = coarse->initial;
+        CoarseCloth copy;
+        copy.from_fine = surface_transfer(fine->x, fine->y, fine->z, fine->triangles, c.x, c.y, c.z);
+        copy.to_finer = surface_transfer(c.x, c.y, c.z, coarse->cloth.triangles, fx, fy, fz);
+        copy.cloth = std::move(coarse->cloth);
+        return copy;
+    };
+}
+
 BuiltScene build_scene_body(const SceneSpec& s) {
     BuiltScene out;
     if (s.cloth == ClothType::grid) {
@@ -1419,56 +1517,8 @@ BuiltScene build_scene_body(const SceneSpec& s) {
         out.cloth = std::move(b.cloth);
         out.initial = std::move(b.initial);
     } else if (s.cloth == ClothType::outline) {
-        const OutlineClothSpec& o = s.outline;
-        double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
-        for (const auto& v : o.outline.outline)
-            for (int k = 0; k < 2; ++k) lo[k] = std::min(lo[k], v[k]), hi[k] = std::max(hi[k], v[k]);
-        const float cu = float(0.5 * (lo[0] + hi[0])), cv = float(0.5 * (lo[1] + hi[1]));
-        // Panel frame: u along +x; v along +z (horizontal) or -y (vertical); the normal u x v is -y or -z.
-        PanelFrame frame;
-        frame.axis_v = o.plane == GridPlane::horizontal ? std::array{0.0f, 0.0f, 1.0f} : std::array{0.0f, -1.0f, 0.0f};
-        const std::array<float, 3> normal = o.plane == GridPlane::horizontal ? std::array{0.0f, -1.0f, 0.0f}
-                                                                           : std::array{0.0f, 0.0f, -1.0f};
-        const float half_gap = o.copy ? 0.5f * o.gap : 0.0f;
-        // Positions relative to o.centre, the frame's origin (Cloth::origin, set below).
-        for (int k = 0; k < 3; ++k)
-            frame.origin[k] = -cu * frame.axis_u[k] - cv * frame.axis_v[k] - half_gap * normal[k];
-        OutlinePanelParams op;
-        op.spacing = o.spacing;
-        op.areal_density = s.model == MaterialModel::fabric ? s.fabric.density : o.density;
-        GarmentAssembly a;
-        // Panel errors the file could not be checked for before triangulating (an outline too thin for its
-        // spacing) name the file and the fields.
-        const auto panel = [&](const PanelFrame& f) {
-            try {
-                return add_outline_panel(a, o.outline, op, f);
-            } catch (const InvalidInput& e) {
-                throw InvalidInput((s.source.empty() ? std::string("scene") : s.source) + ": cloth.outline at cloth.spacing = " +
-                                   format_number(o.spacing) + " m: " + e.what());
-            }
-        };
-        const OutlinePanelBuild front = panel(frame);
-        if (o.copy) {
-            PanelFrame back = frame;
-            for (int k = 0; k < 3; ++k) back.origin[k] += 2.0f * half_gap * normal[k];
-            const OutlinePanelBuild rear = panel(back);
-            for (const auto& [from, to] : o.sew) {
-                const OutlineStretch stretch{from, to, false};
-                sew_by_arc_length(a, outline_stretch_particles(front, stretch), outline_stretch_particles(rear, stretch),
-                                  o.seam_rest_ratio * o.spacing);
-            }
-        }
-        std::vector<float> inv_mass = a.inverse_masses();
-        const std::vector<float> free_inv_mass = inv_mass;
-        if (o.pin_top) { // the particles along the top (vertical) or the far edge (horizontal: largest z)
-            const bool vertical = o.plane == GridPlane::vertical;
-            float top = -1e30f;
-            for (std::size_t i = 0; i < a.particle_count(); ++i) top = std::max(top, vertical ? a.y[i] : a.z[i]);
-            for (std::size_t i = 0; i < a.particle_count(); ++i)
-                if ((vertical ? a.y[i] : a.z[i]) >= top - 0.25f * o.spacing) inv_mass[i] = 0.0f;
-        }
-        cook_assembly(s, a, inv_mass, free_inv_mass, out);
-        out.cloth.origin = {double(o.centre[0]), double(o.centre[1]), double(o.centre[2])};
+        build_outline_cloth(s, out);
+        set_outline_coarsen(s, out);
     } else if (s.cloth == ClothType::mask) {
         build_mask_cloth(s, out);
     } else if (s.cloth == ClothType::mesh) {

@@ -7,6 +7,7 @@
 
 #include "drape/bending.hpp"
 #include "drape/errors.hpp"
+#include "drape/level_transfer.hpp"
 
 namespace drape {
 
@@ -209,11 +210,21 @@ SceneBuild build_hang_scene(const HangParams& p) {
     if (fabric) {
         set_bending(out.cloth, grid_bending_elements(n, n, h, p.fabric.bend_u, p.fabric.bend_v), p.fabric.damping);
         out.cloth.bending.grid = grid_bending_weights(h, p.fabric.bend_u, p.fabric.bend_v);
-        // The same fabric, pins and placement on a coarser grid (the implicit solver's coarse levels).
-        out.cloth.coarsen = [p](std::uint32_t coarse_n) {
+        // The same fabric, pins and placement on a coarser grid (the implicit solver's coarse levels): each level
+        // (n + 1) / 2 of the next finer one's n per side, the first from N >= 10, none below 5 per side.
+        out.cloth.coarsen = [p](std::uint32_t level) -> std::optional<CoarseCloth> {
+            constexpr std::uint32_t coarsest_side = 5;
+            if (level == 0 || p.n < 2 * coarsest_side) return std::nullopt;
+            std::uint32_t finer = p.n, coarse = p.n;
+            for (std::uint32_t k = 0; k < level && coarse >= coarsest_side; ++k) finer = coarse, coarse = (coarse + 1) / 2;
+            if (coarse < coarsest_side) return std::nullopt;
             HangParams q = p;
-            q.n = coarse_n;
-            return build_hang_scene(q).cloth;
+            q.n = coarse;
+            CoarseCloth c;
+            c.cloth = build_hang_scene(q).cloth;
+            c.from_fine = bilinear_transfer(p.n, coarse);
+            c.to_finer = bilinear_transfer(coarse, finer);
+            return c;
         };
     }
     out.cloth.origin = {double(p.centre[0]), double(p.centre[1]), double(p.centre[2])};

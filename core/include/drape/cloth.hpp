@@ -78,6 +78,8 @@ struct SeamSet {
 /// its ends together: they are one point of the garment), itself where no seam touches it. Union-find.
 std::vector<std::uint32_t> sewn_representatives(const SeamSet& seams, std::size_t particle_count);
 
+struct CoarseCloth; // level_transfer.hpp
+
 /// Everything about a cloth that does not change while it is simulated.
 struct Cloth {
     std::size_t particle_count = 0; ///< real particles
@@ -100,10 +102,11 @@ struct Cloth {
     /// at 1000 m behaves as at the origin); world position = origin + stored position, added back (in double)
     /// only where absolute positions are shown (OBJ export, the run's JSON).
     std::array<double, 3> origin{0.0, 0.0, 0.0};
-    /// For a square grid cloth of the fabric model: builds the same fabric, pins and placement on an n x n grid
-    /// (the implicit solver's coarse levels, implicit.hpp); empty when the cloth cannot be rebuilt so (the springs
-    /// model, whose constants are per spring, and meshes).
-    std::function<Cloth(std::uint32_t n)> coarsen;
+    /// For a cloth of the fabric model that can be rebuilt at a coarser spacing (a square grid, an outline): its
+    /// level-th coarser copy (level 1, 2, ...: about 2^level times the spacing), with the maps between it and the
+    /// cloth (level_transfer.hpp; the implicit solver's coarse levels); nullopt past the coarsest. Empty when the cloth
+    /// cannot be rebuilt so (the springs model, whose constants are per spring; masks and OBJ meshes).
+    std::function<std::optional<CoarseCloth>(std::uint32_t level)> coarsen;
 
     std::size_t block_count() const noexcept { return (padded_count + block_particles - 1) / block_particles; }
     std::size_t spring_count() const noexcept { return edges.size(); }
