@@ -2,6 +2,7 @@
 // copy's triangles on meshes, each against a plain reference.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -27,7 +28,7 @@ TEST(LevelTransfer, BilinearReproducesLinearFields) {
             for (std::uint32_t i = 0; i < to; ++i) {
                 const std::size_t k = std::size_t(j) * to + i;
                 float sum = 0.0f, value = 0.0f;
-                for (int c = 0; c < 4; ++c) {
+                for (std::size_t c = 0; c < LevelTransfer::width; ++c) {
                     ASSERT_LT(t.index[k][c], field.size());
                     sum += t.weight[k][c];
                     value += t.weight[k][c] * field[t.index[k][c]];
@@ -87,7 +88,7 @@ TEST(LevelTransfer, SurfaceTransferFindsTheClosestPoint) {
         }
         V3 mapped{0.0, 0.0, 0.0};
         double sum = 0.0;
-        for (int c = 0; c < 4; ++c) {
+        for (std::size_t c = 0; c < LevelTransfer::width; ++c) {
             mapped = mapped + double(t.weight[p][c]) * at(t.index[p][c]);
             sum += t.weight[p][c];
         }
@@ -106,8 +107,67 @@ TEST(LevelTransfer, SurfaceTransferFindsTheClosestPoint) {
     const LevelTransfer inside = surface_transfer(sx, sy, flat, tri, ix, iy, iz);
     for (std::size_t p = 0; p < ix.size(); ++p) {
         double value = 0.0;
-        for (int c = 0; c < 4; ++c) value += double(inside.weight[p][c]) * field[inside.index[p][c]];
+        for (std::size_t c = 0; c < LevelTransfer::width; ++c)
+            value += double(inside.weight[p][c]) * field[inside.index[p][c]];
         EXPECT_NEAR(value, 4.0 * ix[p] - 7.0 * iy[p] + 1.0, 1e-5) << "point " << p;
+    }
+}
+
+// symmetrise: on a mirror-symmetric layout whose triangulation is not (every cell cut along the same diagonal), a
+// field symmetric across x = 0 maps to a symmetric one and an antisymmetric field to an antisymmetric one; before,
+// points on the diagonals mapped differently from their mirror images.
+TEST(LevelTransfer, SymmetrisedMapsTreatMirrorImagesAlike) {
+    const int n = 9; // source: n x n nodes over [-1, 1]^2, z = 0
+    std::vector<float> sx, sy, sz;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            sx.push_back(-1.0f + 2.0f * float(i) / float(n - 1));
+            sy.push_back(-1.0f + 2.0f * float(j) / float(n - 1));
+            sz.push_back(0.0f);
+        }
+    std::vector<std::uint32_t> tri;
+    for (int j = 0; j + 1 < n; ++j)
+        for (int i = 0; i + 1 < n; ++i) {
+            const std::uint32_t a = j * n + i, b = a + 1, c = a + n, d = c + 1;
+            tri.insert(tri.end(), {a, b, d, a, d, c}); // always the a-d diagonal
+        }
+    std::vector<std::uint32_t> source_twins(sx.size());
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) source_twins[j * n + i] = j * n + (n - 1 - i);
+    // Targets: a 7 x 6 grid of points, many on the source's diagonals, symmetric in x.
+    std::vector<float> tx, ty, tz;
+    const int m = 7;
+    for (int j = 0; j < 6; ++j)
+        for (int i = 0; i < m; ++i) {
+            tx.push_back(-0.9f + 1.8f * float(i) / float(m - 1));
+            ty.push_back(-0.8f + 0.3f * float(j));
+            tz.push_back(0.0f);
+        }
+    std::vector<std::uint32_t> target_twins(tx.size());
+    for (int j = 0; j < 6; ++j)
+        for (int i = 0; i < m; ++i) target_twins[j * m + i] = j * m + (m - 1 - i);
+    std::vector<float> even(sx.size()), odd(sx.size());
+    for (std::size_t i = 0; i < sx.size(); ++i) {
+        even[i] = sx[i] * sx[i] * (sy[i] + 0.5f); // cross terms: a diagonal matters
+        odd[i] = sx[i] * (sy[i] + sy[i] * sy[i]);
+    }
+    auto apply = [](const LevelTransfer& t, const std::vector<float>& f, std::size_t k) {
+        double v = 0.0;
+        for (std::size_t c = 0; c < LevelTransfer::width; ++c) v += double(t.weight[k][c]) * f[t.index[k][c]];
+        return v;
+    };
+    LevelTransfer t = surface_transfer(sx, sy, sz, tri, tx, ty, tz);
+    double before = 0.0;
+    for (std::size_t k = 0; k < tx.size(); ++k)
+        before = std::max(before, std::fabs(apply(t, even, k) - apply(t, even, target_twins[k])));
+    EXPECT_GT(before, 1e-3) << "the plain map is not symmetric (else this test shows nothing)";
+    t.symmetrise(target_twins, source_twins);
+    for (std::size_t k = 0; k < tx.size(); ++k) {
+        EXPECT_NEAR(apply(t, even, k), apply(t, even, target_twins[k]), 1e-6) << "target " << k;
+        EXPECT_NEAR(apply(t, odd, k), -apply(t, odd, target_twins[k]), 1e-6) << "target " << k;
+        float sum = 0.0f;
+        for (float w : t.weight[k]) sum += w;
+        EXPECT_NEAR(sum, 1.0f, 1e-6f);
     }
 }
 

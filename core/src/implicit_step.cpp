@@ -60,11 +60,13 @@ void transfer(const LevelTransfer& t, const float* src, const float* base, float
     const std::size_t count = t.size();
     for_each_index<Parallel>((count + block_particles - 1) / block_particles, [&](std::size_t blk) {
         for (std::size_t k = blk * block_particles, end = std::min(count, (blk + 1) * block_particles); k < end; ++k) {
-            const std::array<std::uint32_t, 4>& i = t.index[k];
-            const std::array<float, 4>& w = t.weight[k];
-            float v = w[0] * src[i[0]] + w[1] * src[i[1]] + w[2] * src[i[2]] + w[3] * src[i[3]];
-            if (base) v -= w[0] * base[i[0]] + w[1] * base[i[1]] + w[2] * base[i[2]] + w[3] * base[i[3]];
-            out[k] = v;
+            const auto& i = t.index[k];
+            const auto& w = t.weight[k];
+            float v = 0.0f, b = 0.0f;
+            for (std::size_t c = 0; c < LevelTransfer::width; ++c) v += w[c] * src[i[c]];
+            if (base)
+                for (std::size_t c = 0; c < LevelTransfer::width; ++c) b += w[c] * base[i[c]];
+            out[k] = v - b;
         }
     });
 }
@@ -74,7 +76,7 @@ void transfer(const LevelTransfer& t, const float* src, const float* base, float
 void transfer_transpose(const LevelTransfer& t, const float* src, float* out, std::size_t out_count) {
     std::fill(out, out + out_count, 0.0f);
     for (std::size_t k = 0; k < t.size(); ++k)
-        for (std::size_t c = 0; c < 4; ++c) out[t.index[k][c]] += src[k] * t.weight[k][c];
+        for (std::size_t c = 0; c < LevelTransfer::width; ++c) out[t.index[k][c]] += src[k] * t.weight[k][c];
 }
 
 } // namespace
@@ -99,12 +101,15 @@ void Simulation::cook_implicit() {
     }
     for (std::uint32_t i = 0; i < cloth_.particle_count; ++i) root[i] = find(i);
     solver->piece_held.assign(cloth_.particle_count, 0);
-    solver->fine.cook(cloth_, cloth_.grid ? std::vector<std::uint32_t>{}
-                                          : vbd::mirror_twins({now.x.data(), n}, {now.y.data(), n}, {now.z.data(), n}));
+    const std::vector<std::uint32_t> fine_twins =
+        cloth_.grid ? std::vector<std::uint32_t>{}
+                    : vbd::mirror_twins({now.x.data(), n}, {now.y.data(), n}, {now.z.data(), n});
+    solver->fine.cook(cloth_, fine_twins);
     if (!edge_rest_.empty()) solver->fine.set_spring_rest(edge_rest_); // seams being sewn (sewing.cpp)
     // Coarse levels: a cloth that can rebuild its fabric at a coarser spacing (Cloth::coarsen: grids, outlines).
     if (cloth_.coarsen) {
         std::size_t finer_count = cloth_.particle_count;
+        std::vector<std::uint32_t> finer_twins; // the next finer copy's mirror twins
         for (std::uint32_t k = 1;; ++k) {
             std::optional<CoarseCloth> copy = cloth_.coarsen(k);
             if (!copy) break;
@@ -117,7 +122,17 @@ void Simulation::cook_implicit() {
             level.cloth = std::move(copy->cloth);
             level.from_fine = std::move(copy->from_fine);
             level.to_finer = std::move(copy->to_finer);
-            level.solver.cook(level.cloth);
+            // A mirror-symmetric copy (the T-shirt's, as built) is coloured in mirror pairs as the cloth is, and its
+            // maps treat mirror images alike.
+            std::vector<std::uint32_t> twins = level.cloth.grid || copy->x.size() != count
+                                                   ? std::vector<std::uint32_t>{}
+                                                   : vbd::mirror_twins(copy->x, copy->y, copy->z);
+            if (!twins.empty() && !fine_twins.empty()) {
+                level.from_fine.symmetrise(twins, fine_twins);
+                level.to_finer.symmetrise(solver->coarse.empty() ? fine_twins : finer_twins, twins);
+            }
+            level.solver.cook(level.cloth, twins);
+            finer_twins = std::move(twins);
             for (std::vector<float>* a : {&level.x0, &level.y0, &level.z0, &level.vx, &level.vy, &level.vz, &level.gx,
                                           &level.gy, &level.gz, &level.x, &level.y, &level.z, &level.inv_mass,
                                           &level.rx, &level.ry, &level.rz, &level.tx, &level.ty, &level.tz})

@@ -13,11 +13,31 @@ std::vector<std::uint32_t> LevelTransfer::nearest() const {
     std::vector<std::uint32_t> out(index.size());
     for (std::size_t k = 0; k < index.size(); ++k) {
         std::size_t best = 0;
-        for (std::size_t c = 1; c < 4; ++c)
+        for (std::size_t c = 1; c < width; ++c)
             if (weight[k][c] >= weight[k][best]) best = c;
         out[k] = index[k][best];
     }
     return out;
+}
+
+void LevelTransfer::symmetrise(const std::vector<std::uint32_t>& target_twins,
+                               const std::vector<std::uint32_t>& source_twins) {
+    if (target_twins.size() != size() || source_twins.empty()) return;
+    const std::vector<std::array<std::uint32_t, width>> own = index;
+    const std::vector<std::array<float, width>> own_weight = weight;
+    for (std::size_t k = 0; k < size(); ++k) {
+        const std::uint32_t twin = target_twins[k];
+        std::array<std::uint32_t, width> i{};
+        std::array<float, width> w{};
+        for (std::size_t c = 0; c < 3; ++c) {
+            i[c] = own[k][c];
+            w[c] = 0.5f * own_weight[k][c];
+            i[3 + c] = source_twins[own[twin][c]];
+            w[3 + c] = 0.5f * own_weight[twin][c];
+        }
+        index[k] = i;
+        weight[k] = w;
+    }
 }
 
 LevelTransfer bilinear_transfer(std::uint32_t from_n, std::uint32_t to_n) {
@@ -36,8 +56,8 @@ LevelTransfer bilinear_transfer(std::uint32_t from_n, std::uint32_t to_n) {
             const float u = fi - float(i0);
             const std::uint32_t k = j0 * from_n + i0;
             const std::size_t target = std::size_t(j) * to_n + i;
-            t.index[target] = {k, k + 1, k + from_n, k + from_n + 1};
-            t.weight[target] = {(1.0f - u) * (1.0f - v), u * (1.0f - v), (1.0f - u) * v, u * v};
+            t.index[target] = {k, k + 1, k + from_n, k + from_n + 1, 0, 0};
+            t.weight[target] = {(1.0f - u) * (1.0f - v), u * (1.0f - v), (1.0f - u) * v, u * v, 0.0f, 0.0f};
         }
     }
     return t;
@@ -49,8 +69,8 @@ LevelTransfer surface_transfer(std::span<const float> sx, std::span<const float>
     using geom::V3;
     const std::size_t tri_count = triangles.size() / 3;
     LevelTransfer t;
-    t.index.assign(tx.size(), {0, 0, 0, 0});
-    t.weight.assign(tx.size(), {0.0f, 0.0f, 0.0f, 0.0f});
+    t.index.assign(tx.size(), {});
+    t.weight.assign(tx.size(), {});
     if (tri_count == 0) return t;
     const auto at = [&](std::uint32_t i) { return V3{sx[i], sy[i], sz[i]}; };
     // The bucket grid: cells of the mean triangle's longest edge, each triangle in every cell its box touches.

@@ -13,6 +13,8 @@
 #include <cerrno>
 #include <cmath>
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <fstream>
 #include <cstdio>
 #include <cstring>
@@ -1463,34 +1465,30 @@ void build_outline_cloth(const SceneSpec& s, BuiltScene& out) {
     out.cloth.origin = {double(o.centre[0]), double(o.centre[1]), double(o.centre[2])};
 }
 
-/// An outline cloth of the fabric model rebuilds itself at 2^level times its spacing for the implicit solver's coarse
-/// levels (Cloth::coarsen). Both copies lie flat where they were built, so the maps between them are taken there: the
-/// closest point on the other copy's triangles (surface_transfer); the cloth's own flat layout is kept for it.
-void set_outline_coarsen(const SceneSpec& s, BuiltScene& out) {
-    if (s.model != MaterialModel::fabric) return;
+/// A cloth of the fabric model that its builder can make at any spacing (an outline, the T-shirt) rebuilds itself at
+/// 2^level times its spacing for the implicit solver's coarse levels (Cloth::coarsen); `build(level)` makes that copy
+/// (nullopt where the builder refuses it: too coarse). Both copies lie where they were built (flat panels), so the
+/// maps between them are taken there: the closest point on the other copy's triangles (surface_transfer); the
+/// cloth's own built layout is kept for it.
+void set_rebuild_coarsen(BuiltScene& out, std::function<std::optional<BuiltScene>(std::uint32_t level)> build) {
     struct Layout {
         std::vector<float> x, y, z;
         std::vector<std::uint32_t> triangles;
     };
     auto fine = std::make_shared<const Layout>(Layout{out.initial.x, out.initial.y, out.initial.z, out.cloth.triangles});
-    out.cloth.coarsen = [s, fine](std::uint32_t level) -> std::optional<CoarseCloth> {
+    out.cloth.coarsen = [build = std::move(build), fine](std::uint32_t level) -> std::optional<CoarseCloth> {
         if (level == 0 || level > 16) return std::nullopt;
-        const auto build = [&](std::uint32_t k) -> std::optional<BuiltScene> {
-            SceneSpec c = s;
-            c.outline.spacing = s.outline.spacing * float(1u << k);
-            c.outline.seam_rest_ratio = s.outline.seam_rest_ratio / float(1u << k); // the seams' own rest length
+        const auto attempt = [&](std::uint32_t k) -> std::optional<BuiltScene> {
             try {
-                BuiltScene b;
-                build_outline_cloth(c, b);
-                return b;
-            } catch (const InvalidInput&) { // too coarse for the outline: no such level
+                return build(k);
+            } catch (const InvalidInput&) { // too coarse for the builder: no such level
                 return std::nullopt;
             }
         };
-        std::optional<BuiltScene> coarse = build(level);
+        std::optional<BuiltScene> coarse = attempt(level);
         if (!coarse) return std::nullopt;
         std::optional<BuiltScene> finer;
-        if (level > 1 && !(finer = build(level - 1))) return std::nullopt;
+        if (level > 1 && !(finer = attempt(level - 1))) return std::nullopt;
         const std::vector<float>& fx = finer ? finer->initial.x : fine->x;
         const std::vector<float>& fy = finer ? finer->initial.y : fine->y;
         const std::vector<float>& fz = finer ? finer->initial.z : fine->z;
@@ -1498,6 +1496,9 @@ void set_outline_coarsen(const SceneSpec& s, BuiltScene& out) {
         CoarseCloth copy;
         copy.from_fine = surface_transfer(fine->x, fine->y, fine->z, fine->triangles, c.x, c.y, c.z);
         copy.to_finer = surface_transfer(c.x, c.y, c.z, coarse->cloth.triangles, fx, fy, fz);
+        copy.x = c.x;
+        copy.y = c.y;
+        copy.z = c.z;
         copy.cloth = std::move(coarse->cloth);
         return copy;
     };
@@ -1518,7 +1519,15 @@ BuiltScene build_scene_body(const SceneSpec& s) {
         out.initial = std::move(b.initial);
     } else if (s.cloth == ClothType::outline) {
         build_outline_cloth(s, out);
-        set_outline_coarsen(s, out);
+        if (s.model == MaterialModel::fabric)
+            set_rebuild_coarsen(out, [s](std::uint32_t k) {
+                SceneSpec c = s;
+                c.outline.spacing = s.outline.spacing * float(1u << k);
+                c.outline.seam_rest_ratio = s.outline.seam_rest_ratio / float(1u << k); // the seams' own rest length
+                BuiltScene b;
+                build_outline_cloth(c, b);
+                return std::optional<BuiltScene>(std::move(b));
+            });
     } else if (s.cloth == ClothType::mask) {
         build_mask_cloth(s, out);
     } else if (s.cloth == ClothType::mesh) {
@@ -1559,7 +1568,9 @@ BuiltScene build_scene_body(const SceneSpec& s) {
         out.cloth.origin = {double(m.centre[0]), double(m.centre[1]), double(m.centre[2])};
     } else if (s.model == MaterialModel::fabric) {
         // Fabric: node masses from the fabric's density and the panels' triangles (TShirtParams::total_mass is not
-        // used); a particle in no triangle gets a third of a half cell. Both panels' u is +-x (mask columns).
+        // used); a particle in no triangle gets a third of a half cell. Both panels' u is +-x (mask columns). No coarse
+        // levels: tried (rebuilt at half the cells per metre), the shirt settled less symmetric at the seed's 35
+        // cells/m (docs/implicit.md, "Outline cloths on their coarse levels").
         TShirtBuild t = build_tshirt(s.tshirt);
         GarmentAssembly& a = t.assembly;
         const std::vector<double> m = lumped_masses(a.x, a.y, a.z, a.triangles, s.fabric.density);

@@ -15,13 +15,19 @@
 namespace drape {
 
 /// A linear map between two discretisations of one cloth: target node k gets
-/// sum over c < 4 of weight[k][c] * source[index[k][c]] (unused entries weigh 0 and point at node 0).
+/// sum over c < width of weight[k][c] * source[index[k][c]] (unused entries weigh 0 and point at node 0).
 struct LevelTransfer {
-    std::vector<std::array<std::uint32_t, 4>> index;
-    std::vector<std::array<float, 4>> weight;
+    static constexpr std::size_t width = 6; ///< bilinear: 4; a triangle: 3; a triangle and its mirror image: 6
+    std::vector<std::array<std::uint32_t, width>> index;
+    std::vector<std::array<float, width>> weight;
     std::size_t size() const noexcept { return index.size(); }
     /// Per target node: the source node of its largest weight (the later one on a tie): the source node nearest it.
     std::vector<std::uint32_t> nearest() const;
+    /// For a mirror-symmetric pair of layouts (each node's mirror twin, vbd::mirror_twins, in the target and in the
+    /// source): each target node's map becomes the mean of its own and its twin's mirrored, so that mirror images
+    /// map alike (a triangulation is not mirror symmetric: a point on a cell's diagonal took that diagonal's ends).
+    /// Needs at most 3 entries per node; does nothing when either twin list is empty.
+    void symmetrise(const std::vector<std::uint32_t>& target_twins, const std::vector<std::uint32_t>& source_twins);
 };
 
 /// A coarser copy of a cloth: the same material, pins and placement at about twice the spacing of the next finer.
@@ -29,6 +35,7 @@ struct CoarseCloth {
     Cloth cloth;
     LevelTransfer from_fine; ///< onto this copy's nodes, from the cloth's own particles
     LevelTransfer to_finer;  ///< onto the next finer copy's nodes (the cloth's own particles for the first), from this
+    std::vector<float> x, y, z; ///< where the copy was built (a mesh's layout: its mirror twins are found there)
 };
 
 /// Square grids, node (i, j) of a to_n x to_n grid sampled bilinearly at (i, j) (from_n - 1) / (to_n - 1) on a
