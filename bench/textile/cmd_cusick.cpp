@@ -98,8 +98,9 @@ std::uint32_t circle_vertices(double spacing) {
 
 /// The standard's circular specimen (radius 15 cm) as an outline cloth (a regular polygon, circle_vertices(h)
 /// vertices on the circle), horizontal, built by build_scene with the fabric model, centred on the disc. Its
-/// specimen area is the polygon's (what the cloth covers flat; within 0.3 % of pi r^2 at 20 mm).
-CusickResult run_cusick_circle(const Fabric& fabric, double spacing, double drag, double max_time) {
+/// specimen area is the polygon's (what the cloth covers flat; within 0.3 % of pi r^2 at 20 mm). With `square`, the
+/// 30 cm square as an outline (4 vertices): the square grid specimen's shape with the circle's mesh model.
+CusickResult run_cusick_outline(const Fabric& fabric, double spacing, double drag, double max_time, bool square) {
     CusickResult r;
     SceneSpec spec;
     spec.name = "cusick";
@@ -108,11 +109,15 @@ CusickResult run_cusick_circle(const Fabric& fabric, double spacing, double drag
     spec.model = MaterialModel::fabric;
     spec.fabric = fabric;
     OutlineClothSpec& o = spec.outline;
-    const std::uint32_t nv = circle_vertices(spacing);
-    for (std::uint32_t k = 0; k < nv; ++k) {
-        const double a = 2.0 * pi * double(k) / double(nv);
-        o.outline.outline.push_back({specimen_radius * std::cos(a), specimen_radius * std::sin(a)});
-    }
+    const std::uint32_t nv = square ? 4 : circle_vertices(spacing);
+    const double half = 0.5 * specimen_side;
+    if (square)
+        o.outline.outline = {{-half, -half}, {half, -half}, {half, half}, {-half, half}};
+    else
+        for (std::uint32_t k = 0; k < nv; ++k) {
+            const double a = 2.0 * pi * double(k) / double(nv);
+            o.outline.outline.push_back({specimen_radius * std::cos(a), specimen_radius * std::sin(a)});
+        }
     o.spacing = static_cast<float>(spacing);
     o.plane = GridPlane::horizontal;
     const ColliderSurface surface{0.001f, 0.6f};
@@ -121,7 +126,8 @@ CusickResult run_cusick_circle(const Fabric& fabric, double spacing, double drag
     spec.physics.colliders = cusick_colliders(surface);
     BuiltScene scene = build_scene(spec); // colliders into the cloth's frame, dt = 0.9 x the stability bound
     r.n = nv;
-    r.specimen_area = 0.5 * double(nv) * specimen_radius * specimen_radius * std::sin(2.0 * pi / double(nv));
+    r.specimen_area = square ? specimen_side * specimen_side
+                             : 0.5 * double(nv) * specimen_radius * specimen_radius * std::sin(2.0 * pi / double(nv));
     settle_and_measure(std::move(scene.cloth), scene.initial, scene.params, max_time, r);
     return r;
 }
@@ -139,6 +145,9 @@ int cmd_cusick(const Options& opt) {
     const bool square = opt.square;
     if (square)
         std::printf("Cusick drape test: square specimen %.0f cm (grid cloth, N x N particles)", specimen_side * 100.0);
+    else if (opt.square_outline)
+        std::printf("Cusick drape test: square specimen %.0f cm as an outline cloth (triangle-mesh fabric model)",
+                    specimen_side * 100.0);
     else
         std::printf("Cusick drape test: circular specimen, diameter %.0f cm (outline cloth: a regular polygon of "
                     "ceil(2 pi r / h) >= 32 vertices, triangle-mesh fabric model)", specimen_radius * 200.0);
@@ -153,13 +162,16 @@ int cmd_cusick(const Options& opt) {
         for (double h : spacings) {
             const Fabric fabric = textile_fabric(name);
             const CusickResult r = square ? run_cusick_square(fabric, h, drag, max_time)
-                                          : run_cusick_circle(fabric, h, drag, max_time);
+                                          : run_cusick_outline(fabric, h, drag, max_time, opt.square_outline);
             std::printf("| %s | %.1f | %zu | %.3f | %d | %.1f | %.1f | %.2f%s | %zu | %.1f |\n", name.c_str(), h * 1e3,
                         square ? std::size_t(r.n) : r.particles, r.dc, r.folds, r.r_min * 1e3, r.r_max * 1e3,
                         r.settle.sim_time, r.settle.settled ? "" : " (not settled)", r.settle.steps, r.settle.wall);
             std::fflush(stdout);
             if (!opt.png_dir.empty() && h == spacings.back()) {
-                const std::string path = opt.png_dir + (square ? "/cusick_" : "/cusick_circle_") + name + ".png";
+                const std::string path = opt.png_dir + (square                ? "/cusick_"
+                                                        : opt.square_outline ? "/cusick_square_outline_"
+                                                                             : "/cusick_circle_") +
+                                         name + ".png";
                 if (!write_top_view_png(r.view, path, disc_radius, specimen_radius))
                     std::fprintf(stderr, "drape_textile: cannot write %s\n", path.c_str());
                 else

@@ -9,7 +9,8 @@
 //   drape_textile verlet                Verlet against symplectic Euler at rest, N = 32
 // Options: --threads T (default 1) worker threads; --fabric NAME (repeatable) presets; --quick coarse only; --fine
 // adds the finest resolution; --png DIR (cusick) top views; --n N (repeatable, hang) grid sizes; --static (hang) the
-// settled shape only, no swing; --spacing H (repeatable, cusick) grid spacings in m; --square (cusick) the square
+// settled shape only, no swing; --spacing H (repeatable, cusick) grid spacings in m; --square-outline (cusick) the
+// 30 cm square as an outline cloth (the circle's mesh model); --square (cusick) the square
 // grid specimen instead of the circle; --max-time S (cusick) settling time limit (default 6 s).
 #include <cmath>
 #include <cstdlib>
@@ -64,6 +65,7 @@ int main(int argc, char** argv) {
         else if (s == "--png" && a + 1 < argc) opt.png_dir = argv[++a];
         else if (s == "--static") opt.static_only = true;
         else if (s == "--square") opt.square = true;
+        else if (s == "--square-outline") opt.square_outline = true;
         else if (s == "--max-time" && a + 1 < argc) {
             opt.max_time = std::atof(argv[++a]);
             if (!(opt.max_time > 0.0 && opt.max_time <= 600.0)) {

@@ -16,6 +16,7 @@ struct Options {
     std::vector<double> spacings;     ///< cusick: grid spacings, m (default 0.02, 0.01, 0.005)
     double max_time = 0.0;           ///< cusick: settling time limit, s (0: the default, 6 s)
     bool square = false;              ///< cusick: the 30 cm square grid cloth instead of the standard 30 cm circle
+    bool square_outline = false;      ///< cusick: the 30 cm square as an outline cloth (the circle's mesh model)
     std::string png_dir;
     std::vector<std::string> fabrics;
 };

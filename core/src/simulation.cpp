@@ -224,9 +224,18 @@ void Simulation::set_params(const SimulationParams& params) {
     const KernelPath kernel = resolve_params(params);
     // The last step's velocities stop being this solver's history only when the solver, dt or integrator changes (the
     // viewer sets parameters on any edit: a wind or friction change must not re-guess a resting cloth).
-    // A collider taken away may leave a cloth that rested on it held by nothing (as a pin let go, set_pinned).
+    // A collider taken away or moved may leave a cloth that rested on it held by nothing (as a pin let go,
+    // set_pinned): a table lowered by 1 m in the viewer let its cloth fall at 44 % of g. Its friction or margin alone
+    // does not count.
+    const auto same_solid = [](const Collider& a, const Collider& b) {
+        return a.kind == b.kind && a.centre == b.centre && a.axis == b.axis && a.size == b.size &&
+               a.rotation == b.rotation;
+    };
+    bool colliders_moved = params.colliders.size() != params_.colliders.size();
+    for (std::size_t k = 0; k < params.colliders.size() && !colliders_moved; ++k)
+        colliders_moved = !same_solid(params.colliders[k], params_.colliders[k]);
     if (params.solver != params_.solver || params.dt != params_.dt || params.integrator != params_.integrator ||
-        params.colliders.size() < params_.colliders.size())
+        colliders_moved)
         implicit_fresh_ = true;
     // A new integrator or dt changes what u, v, w mean (velocity, or displacement per step): convert them.
     if (params.integrator != params_.integrator || params.dt != params_.dt) {
