@@ -122,8 +122,8 @@ void Simulation::cook_implicit() {
             level.cloth = std::move(copy->cloth);
             level.from_fine = std::move(copy->from_fine);
             level.to_finer = std::move(copy->to_finer);
-            // A mirror-symmetric copy (the T-shirt's, as built) is coloured in mirror pairs as the cloth is, and its
-            // maps treat mirror images alike.
+            // A mirror-symmetric copy (an outline cut symmetric, as built) is coloured in mirror pairs as the cloth is,
+            // and its maps treat mirror images alike.
             std::vector<std::uint32_t> twins = level.cloth.grid || copy->x.size() != count
                                                    ? std::vector<std::uint32_t>{}
                                                    : vbd::mirror_twins(copy->x, copy->y, copy->z);

@@ -85,9 +85,13 @@ LevelTransfer surface_transfer(std::span<const float> sx, std::span<const float>
         }
         edge_sum += longest;
     }
-    const double cell = std::max(edge_sum / double(tri_count), 1e-9);
+    double cell = std::max(edge_sum / double(tri_count), 1e-9);
     std::int64_t dims[3];
-    for (int d = 0; d < 3; ++d) dims[d] = std::clamp<std::int64_t>(std::int64_t((hi[d] - lo[d]) / cell) + 1, 1, 4096);
+    for (;;) { // at most a few cells per triangle (a layout far from flat gets larger cells)
+        for (int d = 0; d < 3; ++d) dims[d] = std::clamp<std::int64_t>(std::int64_t((hi[d] - lo[d]) / cell) + 1, 1, 4096);
+        if (double(dims[0]) * double(dims[1]) * double(dims[2]) <= 8.0 * double(tri_count) + 64.0) break;
+        cell *= 1.5;
+    }
     const auto cell_of = [&](double v, int d) {
         return std::clamp<std::int64_t>(std::int64_t(std::floor((v - lo[d]) / cell)), 0, dims[d] - 1);
     };
