@@ -11,6 +11,8 @@
 #include "drape/simulation.hpp"
 #include "drape/triangle_contact.hpp"
 
+#include "../core/src/disc_lattice.hpp"
+
 namespace drape {
 namespace {
 
@@ -176,3 +178,27 @@ INSTANTIATE_TEST_SUITE_P(Sizes, TriangleContactDrop,
 
 } // namespace
 } // namespace drape
+
+// The disc's rim lattice (disc_lattice.hpp): the SIMD kernel finds the same lattice point as its scalar reference, bit
+// for bit, on triangles across the rim, on the top face, inside and far off, at every lattice size it is used with.
+TEST(TriangleContact, DiscLatticeSimdMatchesTheScalarReference) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> around(-0.03f, 0.03f), size(0.001f, 0.04f);
+    int cases = 0;
+    for (int k = 0; k < 3000; ++k) {
+        const float R = 0.09f, h = 0.02f;
+        // A vertex near the rim (r = R, y = 0) and edges of up to 4 cm in any direction.
+        const float angle = 6.2831853f * float(k) / 3000.0f;
+        drape::disc_lattice::Triangle t{R * std::cos(angle) + around(rng), 0.3f * around(rng), R * std::sin(angle) + around(rng),
+                                 size(rng) * (around(rng) > 0 ? 1.0f : -1.0f), 0.5f * around(rng), around(rng),
+                                 around(rng), 0.5f * around(rng), size(rng) * (around(rng) > 0 ? 1.0f : -1.0f), R, h};
+        if (k % 7 == 0) t.ay -= 0.03f; // some deep below the top face, inside or beside the cylinder
+        for (int m : {4, 5, 13, 16, 17, 31, 48}) {
+            const std::array<int, 2> simd = drape::disc_lattice::minimum(t, m),
+                                     scalar = drape::disc_lattice::minimum_scalar(t, m);
+            ASSERT_EQ(simd, scalar) << "triangle " << k << ", m " << m;
+            ++cases;
+        }
+    }
+    EXPECT_EQ(cases, 3000 * 7);
+}

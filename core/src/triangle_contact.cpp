@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "closest_points.hpp"
+#include "disc_lattice.hpp"
 
 namespace drape {
 namespace {
@@ -69,18 +70,6 @@ std::array<double, 3> closest_to_segment(V3 e0, V3 e1, V3 a, V3 b, V3 c) noexcep
         const std::array<double, 3> k = closest_on_triangle(x, a, b, c);
         offer(k, x);
     }
-    return best;
-}
-
-/// Minimum of f(s, w) (barycentric (1 - s - w, s, w)) over a lattice of the triangle with `m` intervals per side.
-template <class F> std::array<double, 3> lattice_minimum(F&& f, int m) noexcept {
-    std::array<double, 3> best{1.0, 0.0, 0.0};
-    double fbest = std::numeric_limits<double>::max();
-    for (int i = 0; i <= m; ++i)
-        for (int j = 0; j <= m - i; ++j) {
-            const double s = double(i) / m, w = double(j) / m, v = f(s, w);
-            if (v < fbest) fbest = v, best = {1.0 - s - w, s, w};
-        }
     return best;
 }
 
@@ -154,24 +143,17 @@ bool deepest(const Collider& col, float grow, V3 a, V3 b, V3 c, std::array<doubl
             // least 1 mm), 6 to 48 intervals a side. The true minimum of this convex f is at most a second-order
             // amount deeper (about (spacing / 2)^2 / (2 margin), ~10% of the margin).
             const double spacing = std::max(double(grow), 1e-3);
-            const int m = std::clamp(int(std::ceil(2.0 * radius / spacing)), 4, 48);
-            // In float, relative to the disc's top centre (the lattice's many evaluations are the cost here).
-            const float R = col.size[0], h = col.size[1];
+            const int m = std::clamp(int(std::ceil(2.0 * radius / spacing)), 4, disc_lattice::max_intervals);
+            // In float, relative to the disc's top centre (the lattice's many evaluations are the cost here), a row
+            // of the lattice per SIMD batch (disc_lattice.hpp, bit for bit its scalar reference).
             const V3 o = v3(col.centre);
-            const float ax = float(a.x - o.x), ay = float(a.y - o.y), az = float(a.z - o.z);
-            const float ux = float(b.x - a.x), uy = float(b.y - a.y), uz = float(b.z - a.z);
-            const float vx = float(c.x - a.x), vy = float(c.y - a.y), vz = float(c.z - a.z);
-            bary = lattice_minimum(
-                [&](double s, double w) {
-                    const float fs = float(s), fw = float(w);
-                    const float px = ax + fs * ux + fw * vx, py = ay + fs * uy + fw * vy, pz = az + fs * uz + fw * vz;
-                    const float r = std::sqrt(px * px + pz * pz);
-                    const float er = r - R, ey = std::max(py, -h - py); // > 0 outside the faces
-                    if (er <= 0.0f && ey <= 0.0f) return double(std::max(er, ey)); // inside: minus the depth
-                    const float pr = std::max(er, 0.0f), py2 = std::max(ey, 0.0f);
-                    return double(std::sqrt(pr * pr + py2 * py2));
-                },
-                m);
+            const disc_lattice::Triangle t{float(a.x - o.x), float(a.y - o.y), float(a.z - o.z),
+                                           float(b.x - a.x), float(b.y - a.y), float(b.z - a.z),
+                                           float(c.x - a.x), float(c.y - a.y), float(c.z - a.z),
+                                           col.size[0],      col.size[1]};
+            const std::array<int, 2> ij = disc_lattice::minimum(t, m);
+            const double s = double(ij[0]) / m, w = double(ij[1]) / m;
+            bary = {1.0 - s - w, s, w};
         }
         return solid_distance(col, at(bary[1], bary[2])) < grow;
     }
