@@ -103,7 +103,8 @@ int main(int argc, char** argv) {
                     "(0 = always run --iterations) [scene's, 0]")
         ->check(in_range<float>(0.0f, 1.0f));
     cmd->add_flag("--fas", run.fas,
-                  "Implicit solver, grid cloths of the fabric model: the coarse levels of the multilevel guess solve with the "
+                  "Implicit solver, grid and outline cloths of the fabric model: the coarse levels of the multilevel guess "
+                  "solve with the "
                   "cloth's own force residual (full approximation scheme): a cloth comes to rest at its own equilibrium "
                   "[scene's, off]");
     cmd->add_flag("--single-level", run.single_level,

@@ -56,8 +56,8 @@ struct SolverFlags {
 /// solver, and for --iterations, --tolerance, --fas or --single-level when the solver (the flag's or the scene's) is explicit.
 void apply_solver_flags(SceneSpec& spec, const SolverFlags& flags);
 
-/// A warning for the implicit solver on a cloth it solves on one grid only (no multilevel guess: meshes, garments,
-/// outlines, the springs model, non-square grids; 256 particles or more): such a cloth does not come to rest at
+/// A warning for the implicit solver on a cloth it solves on one grid only (no multilevel guess: OBJ meshes, the
+/// T-shirt and mask garments, the springs model, non-square grids; 256 particles or more): such a cloth does not come to rest at
 /// ordinary sweep counts (docs/implicit.md). Empty when it does not apply. `drape run` and the viewer show it.
 std::string single_level_implicit_warning(const Simulation& sim);
 /// A warning when movable particles of the simulation's present state are inside a collider, deeper than half its

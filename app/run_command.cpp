@@ -183,11 +183,12 @@ int run_command(const RunOptions& o) {
     std::optional<Simulation> built;
     workers.run([&] { built.emplace(std::move(scene.cloth), scene.initial, sp); });
     Simulation& sim = *built;
-    // --fas changes the coarse levels' solve; a cloth without coarse levels (a mesh, the springs model, a small grid)
-    // would run exactly as without it.
+    // --fas changes the coarse levels' solve; a cloth without coarse levels (a T-shirt, mask or OBJ mesh, the springs
+    // model, a small grid) would run exactly as without it.
     if (o.fas && sim.implicit_levels() == 1)
         throw InvalidInput("--fas: the coarse correction of the multilevel guess, but this cloth has no coarse levels "
-                           "(only square grids of the fabric model, 10 x 10 and up, have them); drop --fas");
+                           "(only square grids of the fabric model, 10 x 10 and up, and outline cloths of the fabric model have "
+                           "them); drop --fas");
     for (const std::string& w : {single_level_implicit_warning(sim), self_collision_thickness_warning(sim),
                                  started_inside_warning(sim)})
         if (!w.empty()) std::cerr << "drape run: warning: " << w << "\n";

@@ -389,7 +389,8 @@ void Viewer::ui_solver() {
                 "off.");
     bool multilevel = p.implicit.multilevel;
     if (ImGui::Checkbox("multilevel guess", &multilevel)) s.set_multilevel(multilevel);
-    help_marker("Grid cloths of the fabric model: each step starts from the same step solved on coarser grids, so a "
+    help_marker("Grid and outline cloths of the fabric model: each step starts from the same step solved on coarser "
+                "copies of the cloth, so a "
                 "hanging cloth falls and settles in a few sweeps. Switch it off for cloth lying folded or crumpled on "
                 "a collider: the coarse grids cannot represent a fold and their guess keeps such a cloth moving.");
     bool budget = s.iteration_budget();

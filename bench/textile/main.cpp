@@ -81,6 +81,11 @@ int main(int argc, char** argv) {
             return 2;
         }
     }
+    if (opt.square && opt.square_outline) {
+        std::fprintf(stderr, "drape_textile: --square (a grid cloth) and --square-outline (an outline cloth) exclude "
+                             "each other\n");
+        return 2;
+    }
     if (cmd == "elastica") return cmd_elastica();
     Workers workers(opt.threads);
     return workers.run([&]() -> int {

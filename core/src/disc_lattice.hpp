@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <limits>
 
@@ -50,6 +51,7 @@ inline std::array<int, 2> minimum_scalar(const Triangle& t, int m) noexcept {
 
 /// The same, simd::width points of a row at once (m <= max_intervals).
 inline std::array<int, 2> minimum(const Triangle& t, int m) noexcept {
+    assert(m >= 1 && m <= max_intervals);
     using simd::fbatch;
     constexpr std::size_t W = simd::width;
     alignas(64) float coord[max_intervals + 1 + W];
@@ -68,10 +70,11 @@ inline std::array<int, 2> minimum(const Triangle& t, int m) noexcept {
             const fbatch fw = simd::loadu(coord + j0);
             const fbatch px = sx + fw * vx, py = sy + fw * vy, pz = sz + fw * vz;
             const fbatch r = xsimd::sqrt(px * px + pz * pz);
-            const fbatch er = r - R, ey = xsimd::max(py, minus_h - py);
-            const fbatch pr = xsimd::max(er, zero), py2 = xsimd::max(ey, zero);
+            // std::max(a, b) is a < b ? b : a, which max_ps(b, a) is (NaN and signed zeros included): operands swapped.
+            const fbatch er = r - R, ey = xsimd::max(minus_h - py, py);
+            const fbatch pr = xsimd::max(zero, er), py2 = xsimd::max(zero, ey);
             const fbatch outside = xsimd::sqrt(pr * pr + py2 * py2);
-            const fbatch v = xsimd::select((er <= zero) && (ey <= zero), xsimd::max(er, ey), outside);
+            const fbatch v = xsimd::select((er <= zero) && (ey <= zero), xsimd::max(ey, er), outside);
             v.store_unaligned(row + j0);
         }
         for (int j = 0; j < count; ++j)

@@ -28,6 +28,7 @@ struct CoarseLevel {
     std::vector<float> rx, ry, rz;    ///< the cloth's force residual at x^n restricted onto this level (N)
     std::vector<float> tx, ty, tz;    ///< scratch: this level's own residual at x^n
     std::vector<float> rest0, rest;   ///< per Cloth::edges entry: the natural rest length and this step's
+    double sweep_factor = 2.0;        ///< its sweeps per step over the cloth's (implicit_step.cpp)
     bool slack = false;               ///< the solver's springs hold `rest` (FAS), not `rest0`
 };
 

@@ -4,8 +4,8 @@
 //   1. per particle: the inertial prediction y = x^n + h v^n + h^2 (g + wind + f_aero / m) and the initial guess
 //      (VBD paper section 3.6, "adaptive"): x^n + h v^n + h^2 (s g + the rest), s = the part of gravity the particle
 //      was last seen accelerating with, clamped to [0, 1] (a resting particle starts at rest, a falling one falls);
-//   2. on a grid cloth of the fabric model, the multilevel guess: the same step solved on coarser grids of the same
-//      fabric, coarsest first, each level's displacement interpolated onto the next finer one as its initial guess;
+//   2. on a grid or outline cloth of the fabric model, the multilevel guess: the same step solved on coarser copies
+//      of the same fabric, coarsest first, each level's displacement mapped onto the next finer one as its guess;
 //   3. the sweeps (vbd::Solver::run): colours in order, each vertex one local Newton step, Chebyshev acceleration;
 //   4. v^{n+1} = (x - x^n) / h.
 // The step then goes through the same strain-limit and collide passes as an explicit substep (substep.cpp).
@@ -117,8 +117,15 @@ void Simulation::cook_implicit() {
             if (count < coarsest_particles || double(count) > coarse_share_max * double(finer_count) ||
                 copy->from_fine.size() != count || copy->to_finer.size() != finer_count)
                 break;
-            finer_count = count;
             CoarseLevel level;
+            // Twice the sweeps of the next finer level where it has at most a third of that one's particles (a grid's
+            // quarter: twice the sweeps cost half as much), else the square root of the ratio (an outline's levels
+            // thin less: its outline's own points stay), so that no level costs more than the next finer one.
+            const double ratio = double(finer_count) / double(count);
+            level.sweep_factor =
+                std::min(256.0, (solver->coarse.empty() ? 1.0 : solver->coarse.back().sweep_factor) *
+                                    (ratio >= 3.0 ? 2.0 : std::sqrt(ratio)));
+            finer_count = count;
             level.cloth = std::move(copy->cloth);
             level.from_fine = std::move(copy->from_fine);
             level.to_finer = std::move(copy->to_finer);
@@ -274,10 +281,11 @@ template <bool Parallel> void Simulation::multilevel_guess() {
             L.solver.set_spring_rest(L.rest);
             L.slack = false;
         }
-        // A level has a quarter of the particles of the next finer one: twice its sweeps cost half as much.
+        // The level's sweeps: the cloth's times L.sweep_factor (cook_implicit), at most coarse_iterations_max.
         ImplicitParams level_params = params_.implicit;
         const std::uint32_t k = params_.implicit.iterations;
-        level_params.iterations = std::min<std::uint32_t>(std::max(coarse_iterations_max, 2 * k), k << std::min<std::size_t>(l + 1, 8));
+        level_params.iterations = std::min<std::uint32_t>(std::max(coarse_iterations_max, 2 * k),
+                                                          static_cast<std::uint32_t>(std::lround(k * L.sweep_factor)));
         L.solver.run<Parallel>({L.x0.data(), L.y0.data(), L.z0.data(), L.x.data(), L.y.data(), L.z.data(),
                                 L.inv_mass.data(), params_.colliders},
                                level_params, h, params_.air_drag);

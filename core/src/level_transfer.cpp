@@ -25,8 +25,16 @@ void LevelTransfer::symmetrise(const std::vector<std::uint32_t>& target_twins,
     if (target_twins.size() != size() || source_twins.empty()) return;
     const std::vector<std::array<std::uint32_t, width>> own = index;
     const std::vector<std::array<float, width>> own_weight = weight;
+    constexpr std::uint32_t none = 0xFFFFFFFFu; // vbd::mirror_twins: a node without a twin (up to 5 % of them)
+    const auto twinned = [&](const std::array<std::uint32_t, width>& i) {
+        for (std::size_t c = 0; c < 3; ++c)
+            if (i[c] >= source_twins.size() || source_twins[i[c]] == none) return false;
+        return true;
+    };
     for (std::size_t k = 0; k < size(); ++k) {
         const std::uint32_t twin = target_twins[k];
+        // A node or source node without a twin keeps its own map.
+        if (twin >= size() || !twinned(own[twin])) continue;
         std::array<std::uint32_t, width> i{};
         std::array<float, width> w{};
         for (std::size_t c = 0; c < 3; ++c) {

@@ -1465,7 +1465,7 @@ void build_outline_cloth(const SceneSpec& s, BuiltScene& out) {
     out.cloth.origin = {double(o.centre[0]), double(o.centre[1]), double(o.centre[2])};
 }
 
-/// A cloth of the fabric model that its builder can make at any spacing (an outline, the T-shirt) rebuilds itself at
+/// A cloth of the fabric model that its builder can make at any spacing (an outline) rebuilds itself at
 /// 2^level times its spacing for the implicit solver's coarse levels (Cloth::coarsen); `build(level)` makes that copy
 /// (nullopt where the builder refuses it: too coarse). Both copies lie where they were built (flat panels), so the
 /// maps between them are taken there: the closest point on the other copy's triangles (surface_transfer); the
@@ -1519,8 +1519,11 @@ BuiltScene build_scene_body(const SceneSpec& s) {
         out.initial = std::move(b.initial);
     } else if (s.cloth == ClothType::outline) {
         build_outline_cloth(s, out);
-        if (s.model == MaterialModel::fabric)
-            set_rebuild_coarsen(out, [s](std::uint32_t k) {
+        if (s.model == MaterialModel::fabric) {
+            SceneSpec base = s; // what the rebuilds need (not a saved state's arrays)
+            base.state.reset();
+            set_rebuild_coarsen(out, [base](std::uint32_t k) {
+                const SceneSpec& s = base;
                 SceneSpec c = s;
                 c.outline.spacing = s.outline.spacing * float(1u << k);
                 c.outline.seam_rest_ratio = s.outline.seam_rest_ratio / float(1u << k); // the seams' own rest length
@@ -1528,6 +1531,7 @@ BuiltScene build_scene_body(const SceneSpec& s) {
                 build_outline_cloth(c, b);
                 return std::optional<BuiltScene>(std::move(b));
             });
+        }
     } else if (s.cloth == ClothType::mask) {
         build_mask_cloth(s, out);
     } else if (s.cloth == ClothType::mesh) {

@@ -46,8 +46,8 @@ struct ImplicitParams {
     /// Chebyshev acceleration's estimate of the sweep's spectral radius, [0, 1); 0 = off.
     float chebyshev_rho = 0.9f;
     ImplicitMethod method = ImplicitMethod::gauss_seidel;
-    /// On a grid cloth of the fabric model: start each step from the same step solved on coarser grids of the same
-    /// fabric (coarsest first, each level's displacement interpolated onto the next as its initial guess).
+    /// On a grid or outline cloth of the fabric model: start each step from the same step solved on coarser copies of
+    /// the same fabric (coarsest first, each level's displacement mapped onto the next as its initial guess).
     bool multilevel = true;
     /// With the multilevel guess: each coarse level solves its step with the cloth's own force residual at x^n
     /// (a full approximation scheme, docs/implicit.md "Coarse correction"), so a cloth at rest stays at rest and comes

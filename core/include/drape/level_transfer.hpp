@@ -26,7 +26,8 @@ struct LevelTransfer {
     /// For a mirror-symmetric pair of layouts (each node's mirror twin, vbd::mirror_twins, in the target and in the
     /// source): each target node's map becomes the mean of its own and its twin's mirrored, so that mirror images
     /// map alike (a triangulation is not mirror symmetric: a point on a cell's diagonal took that diagonal's ends).
-    /// Needs at most 3 entries per node; does nothing when either twin list is empty.
+    /// Needs at most 3 entries per node; does nothing when either twin list is empty; a node whose twin, or one of
+    /// whose twin's source nodes, has no twin (UINT32_MAX) keeps its own map.
     void symmetrise(const std::vector<std::uint32_t>& target_twins, const std::vector<std::uint32_t>& source_twins);
 };
 

@@ -240,8 +240,8 @@ class Simulation {
 
     /// Figures of the last implicit step (iterations, residual); zeros before the first.
     const ImplicitStats& implicit_stats() const noexcept { return implicit_stats_; }
-    /// Grids the implicit solver solves per step: 1 + the coarse levels of its multilevel guess (only square grid
-    /// cloths of the fabric model have them); 0 while the implicit solver is not cooked.
+    /// Levels the implicit solver solves per step: 1 + the coarse levels of its multilevel guess (only square grid and
+    /// outline cloths of the fabric model have them); 0 while the implicit solver is not cooked.
     std::uint32_t implicit_levels() const noexcept;
     /// Self-collision contacts applied in the first round of the stage's last run: point-triangle and edge-edge pairs closer
     /// than the thickness, less those already held at it (within 1%) and not approaching; 0 when self-collision is off.
