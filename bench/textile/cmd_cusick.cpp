@@ -100,7 +100,10 @@ std::uint32_t circle_vertices(double spacing) {
 /// vertices on the circle), horizontal, built by build_scene with the fabric model, centred on the disc. Its
 /// specimen area is the polygon's (what the cloth covers flat; within 0.3 % of pi r^2 at 20 mm). With `square`, the
 /// 30 cm square as an outline (4 vertices): the square grid specimen's shape with the circle's mesh model.
-CusickResult run_cusick_outline(const Fabric& fabric, double spacing, double drag, double max_time, bool square) {
+/// `phase` in [0, 1) turns the circle's polygon by that fraction of the angle between its vertices (the same circle,
+/// another mesh of it: the u-v fill lattice and the outline samples fall differently); 0 for the square.
+CusickResult run_cusick_outline(const Fabric& fabric, double spacing, double drag, double max_time, bool square,
+                                double phase) {
     CusickResult r;
     SceneSpec spec;
     spec.name = "cusick";
@@ -115,7 +118,7 @@ CusickResult run_cusick_outline(const Fabric& fabric, double spacing, double dra
         o.outline.outline = {{-half, -half}, {half, -half}, {half, half}, {-half, half}};
     else
         for (std::uint32_t k = 0; k < nv; ++k) {
-            const double a = 2.0 * pi * double(k) / double(nv);
+            const double a = 2.0 * pi * (double(k) + phase) / double(nv);
             o.outline.outline.push_back({specimen_radius * std::cos(a), specimen_radius * std::sin(a)});
         }
     o.spacing = static_cast<float>(spacing);
@@ -128,6 +131,56 @@ CusickResult run_cusick_outline(const Fabric& fabric, double spacing, double dra
     r.n = nv;
     r.specimen_area = square ? specimen_side * specimen_side
                              : 0.5 * double(nv) * specimen_radius * specimen_radius * std::sin(2.0 * pi / double(nv));
+    settle_and_measure(std::move(scene.cloth), scene.initial, scene.params, max_time, r);
+    return r;
+}
+
+/// The standard's circular specimen as a mask cloth: the cells (row, column) of a u-v grid of spacing h whose centre
+/// lies within the 15 cm radius, horizontal, centred on the disc; triangles, springs and bending as any mask panel
+/// (the triangle-mesh fabric model, weave-aligned). Its edge is a staircase of grid-aligned triangles instead of the
+/// outline cloth's band of cut triangles; its specimen area is its triangles' (within O(h) of pi r^2). `phase` in
+/// [0, 1) moves the circle's centre off the cell lattice by (phase, frac(3 phase)) cells (another mesh of the same
+/// circle; the specimen stays centred on the disc).
+CusickResult run_cusick_mask_circle(const Fabric& fabric, double spacing, double drag, double max_time, double phase) {
+    CusickResult r;
+    SceneSpec spec;
+    spec.name = "cusick";
+    spec.source = "drape_textile cusick";
+    spec.cloth = ClothType::mask;
+    spec.model = MaterialModel::fabric;
+    spec.fabric = fabric;
+    const auto cells = static_cast<std::uint32_t>(std::floor(2.0 * specimen_radius / spacing)) + 2;
+    const double mid_u = 0.5 * double(cells - 2) + phase, mid_v = 0.5 * double(cells - 2) + (3.0 * phase - std::floor(3.0 * phase));
+    MaskPanelSpec panel;
+    panel.name = "specimen";
+    panel.cell_size = static_cast<float>(spacing);
+    for (std::uint32_t row = 0; row < cells; ++row) {
+        std::string line(cells, '0');
+        for (std::uint32_t c = 0; c < cells; ++c)
+            if (std::hypot((double(c) - mid_u) * spacing, (double(row) - mid_v) * spacing) <= specimen_radius + 1e-9)
+                line[c] = '1';
+        panel.mask.rows.push_back(line);
+    }
+    const ColliderSurface surface{0.001f, 0.6f};
+    // u along +x, v along -z: the panel's normal u x v points up; the circle's centre on the disc axis.
+    panel.axis_u = {1.0f, 0.0f, 0.0f};
+    panel.axis_v = {0.0f, 0.0f, -1.0f};
+    panel.origin = {-mid_u * spacing, double(surface.thickness) + drop_height, mid_v * spacing};
+    spec.masks.panels.push_back(panel);
+    spec.physics.air_drag = static_cast<float>(drag);
+    spec.physics.colliders = cusick_colliders(surface);
+    BuiltScene scene = build_scene(spec);
+    r.n = cells;
+    const std::vector<float>& x = scene.initial.x;
+    const std::vector<float>& z = scene.initial.z;
+    const std::vector<std::uint32_t>& t = scene.cloth.triangles;
+    double area = 0.0;
+    for (std::size_t k = 0; k + 2 < t.size(); k += 3) {
+        const double ux = double(x[t[k + 1]]) - x[t[k]], uz = double(z[t[k + 1]]) - z[t[k]];
+        const double vx = double(x[t[k + 2]]) - x[t[k]], vz = double(z[t[k + 2]]) - z[t[k]];
+        area += 0.5 * std::fabs(ux * vz - uz * vx);
+    }
+    r.specimen_area = area;
     settle_and_measure(std::move(scene.cloth), scene.initial, scene.params, max_time, r);
     return r;
 }
@@ -145,6 +198,9 @@ int cmd_cusick(const Options& opt) {
     const bool square = opt.square;
     if (square)
         std::printf("Cusick drape test: square specimen %.0f cm (grid cloth, N x N particles)", specimen_side * 100.0);
+    else if (opt.mask_circle)
+        std::printf("Cusick drape test: circular specimen, diameter %.0f cm, as a mask cloth (the u-v grid cells "
+                    "within the circle, triangle-mesh fabric model)", specimen_radius * 200.0);
     else if (opt.square_outline)
         std::printf("Cusick drape test: square specimen %.0f cm as an outline cloth (triangle-mesh fabric model)",
                     specimen_side * 100.0);
@@ -155,29 +211,70 @@ int cmd_cusick(const Options& opt) {
                 "%.1f 1/s, settled (max speed < 1 mm/s, or the mean height still to 0.1 um per 20 ms, at 5 checks in "
                 "a row; else %.0f s); shadow rasterised at 0.5 mm; DC = (shadow - disc) / (specimen - disc)\n\n",
                 disc_radius * 1e3, (drop_height + 0.001) * 1e3, drag, max_time);
-    std::printf("| fabric | h (mm) | %s | DC | folds | r min (mm) | r max (mm) | sim s | steps | wall s |\n",
-                square ? "N" : "particles");
-    std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    if (opt.shear > 0.0) std::printf("Every fabric's shear stiffness replaced by %g N/m (--shear)\n\n", opt.shear);
+    const int samples = std::max(1, opt.samples);
+    if (samples > 1)
+        std::printf("%d meshes of each specimen (sample k: %s k / %d); the summary gives their mean DC and its "
+                    "sample standard deviation\n\n",
+                    samples,
+                    opt.mask_circle ? "the circle's centre moved off the cell lattice by (k, frac(3 k)) cells x"
+                                    : "the polygon turned by the angle between two of its vertices x",
+                    samples);
+    std::printf("| fabric | h (mm) |%s %s | DC | folds | r min (mm) | r max (mm) | sim s | steps | wall s |\n",
+                samples > 1 ? " sample |" : "", square ? "N" : "particles");
+    std::printf("|---|---:|%s---:|---:|---:|---:|---:|---:|---:|---:|\n", samples > 1 ? "---:|" : "");
+    struct Summary {
+        std::string fabric;
+        double h = 0.0, mean = 0.0, sd = 0.0, lo = 0.0, hi = 0.0;
+        std::string folds;
+    };
+    std::vector<Summary> summary;
     for (const std::string& name : fabrics)
         for (double h : spacings) {
-            const Fabric fabric = textile_fabric(name);
-            const CusickResult r = square ? run_cusick_square(fabric, h, drag, max_time)
-                                          : run_cusick_outline(fabric, h, drag, max_time, opt.square_outline);
-            std::printf("| %s | %.1f | %zu | %.3f | %d | %.1f | %.1f | %.2f%s | %zu | %.1f |\n", name.c_str(), h * 1e3,
-                        square ? std::size_t(r.n) : r.particles, r.dc, r.folds, r.r_min * 1e3, r.r_max * 1e3,
-                        r.settle.sim_time, r.settle.settled ? "" : " (not settled)", r.settle.steps, r.settle.wall);
-            std::fflush(stdout);
-            if (!opt.png_dir.empty() && h == spacings.back()) {
-                const std::string path = opt.png_dir + (square                ? "/cusick_"
-                                                        : opt.square_outline ? "/cusick_square_outline_"
-                                                                             : "/cusick_circle_") +
-                                         name + ".png";
-                if (!write_top_view_png(r.view, path, disc_radius, specimen_radius))
-                    std::fprintf(stderr, "drape_textile: cannot write %s\n", path.c_str());
-                else
-                    std::printf("\n(wrote %s)\n\n", path.c_str());
+            Fabric fabric = textile_fabric(name);
+            if (opt.shear > 0.0) fabric.shear = static_cast<float>(opt.shear);
+            std::vector<double> dcs;
+            Summary sum{name, h, 0.0, 0.0, 1.0, 0.0, ""};
+            for (int k = 0; k < samples; ++k) {
+                const double phase = double(k) / double(samples);
+                const CusickResult r =
+                    square            ? run_cusick_square(fabric, h, drag, max_time)
+                    : opt.mask_circle ? run_cusick_mask_circle(fabric, h, drag, max_time, phase)
+                                      : run_cusick_outline(fabric, h, drag, max_time, opt.square_outline, phase);
+                char sample[32] = "";
+                if (samples > 1) std::snprintf(sample, sizeof sample, " %d |", k);
+                std::printf("| %s | %.1f |%s %zu | %.3f | %d | %.1f | %.1f | %.2f%s | %zu | %.1f |\n", name.c_str(),
+                            h * 1e3, sample, square ? std::size_t(r.n) : r.particles, r.dc, r.folds, r.r_min * 1e3,
+                            r.r_max * 1e3, r.settle.sim_time, r.settle.settled ? "" : " (not settled)", r.settle.steps,
+                            r.settle.wall);
+                std::fflush(stdout);
+                dcs.push_back(r.dc);
+                sum.lo = std::min(sum.lo, r.dc);
+                sum.hi = std::max(sum.hi, r.dc);
+                sum.folds += (k ? " / " : "") + std::to_string(r.folds);
+                if (!opt.png_dir.empty() && h == spacings.back() && k == 0) {
+                    const std::string path = opt.png_dir + (square                ? "/cusick_"
+                                                            : opt.square_outline ? "/cusick_square_outline_"
+                                                            : opt.mask_circle    ? "/cusick_mask_circle_"
+                                                                                 : "/cusick_circle_") +
+                                             name + ".png";
+                    if (!write_top_view_png(r.view, path, disc_radius, specimen_radius))
+                        std::fprintf(stderr, "drape_textile: cannot write %s\n", path.c_str());
+                    else
+                        std::printf("\n(wrote %s)\n\n", path.c_str());
+                }
             }
+            for (double d : dcs) sum.mean += d / double(dcs.size());
+            for (double d : dcs) sum.sd += (d - sum.mean) * (d - sum.mean);
+            sum.sd = dcs.size() > 1 ? std::sqrt(sum.sd / double(dcs.size() - 1)) : 0.0;
+            summary.push_back(sum);
         }
+    if (samples > 1) {
+        std::printf("\n| fabric | h (mm) | DC mean | DC sd | DC min - max | folds |\n|---|---:|---:|---:|---|---|\n");
+        for (const Summary& m : summary)
+            std::printf("| %s | %.1f | %.3f | %.3f | %.3f - %.3f | %s |\n", m.fabric.c_str(), m.h * 1e3, m.mean, m.sd,
+                        m.lo, m.hi, m.folds.c_str());
+    }
     return 0;
 }
 

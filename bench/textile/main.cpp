@@ -10,8 +10,12 @@
 // Options: --threads T (default 1) worker threads; --fabric NAME (repeatable) presets; --quick coarse only; --fine
 // adds the finest resolution; --png DIR (cusick) top views; --n N (repeatable, hang) grid sizes; --static (hang) the
 // settled shape only, no swing; --spacing H (repeatable, cusick) grid spacings in m; --square-outline (cusick) the
-// 30 cm square as an outline cloth (the circle's mesh model); --square (cusick) the square
-// grid specimen instead of the circle; --max-time S (cusick) settling time limit (default 6 s).
+// 30 cm square as an outline cloth (the circle's mesh model); --mask-circle (cusick) the 30 cm circle as a mask cloth
+// (the cells of a u-v grid within it: no cut triangles, a staircase edge); --square (cusick) the square
+// grid specimen instead of the circle; --max-time S (cusick) settling time limit (default 6 s); --shear G (cusick)
+// replaces each fabric's in-plane shear stiffness by G N/m (G = stretch / 2 makes a woven's edge modulus the same in
+// every direction: a diagnostic of the weave-aligned edge springs); --samples K (cusick, circle) K meshes of each
+// specimen (the circle turned, or moved off the cell lattice, by k / K of a step), with the mean DC and its spread.
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
@@ -66,10 +70,25 @@ int main(int argc, char** argv) {
         else if (s == "--static") opt.static_only = true;
         else if (s == "--square") opt.square = true;
         else if (s == "--square-outline") opt.square_outline = true;
+        else if (s == "--mask-circle") opt.mask_circle = true;
         else if (s == "--max-time" && a + 1 < argc) {
             opt.max_time = std::atof(argv[++a]);
             if (!(opt.max_time > 0.0 && opt.max_time <= 600.0)) {
                 std::fprintf(stderr, "drape_textile: --max-time must be in (0, 600] s\n");
+                return 2;
+            }
+        }
+        else if (s == "--samples" && a + 1 < argc) {
+            opt.samples = std::atoi(argv[++a]);
+            if (!(opt.samples >= 1 && opt.samples <= 64)) {
+                std::fprintf(stderr, "drape_textile: --samples must be in [1, 64]\n");
+                return 2;
+            }
+        }
+        else if (s == "--shear" && a + 1 < argc) {
+            opt.shear = std::atof(argv[++a]);
+            if (!(opt.shear >= 0.01 && opt.shear <= 1e6)) {
+                std::fprintf(stderr, "drape_textile: --shear must be in [0.01, 1e6] N/m\n");
                 return 2;
             }
         }
@@ -81,9 +100,14 @@ int main(int argc, char** argv) {
             return 2;
         }
     }
-    if (opt.square && opt.square_outline) {
-        std::fprintf(stderr, "drape_textile: --square (a grid cloth) and --square-outline (an outline cloth) exclude "
-                             "each other\n");
+    if (int(opt.square) + int(opt.square_outline) + int(opt.mask_circle) > 1) {
+        std::fprintf(stderr, "drape_textile: --square (a grid cloth), --square-outline (an outline cloth) and "
+                             "--mask-circle (a mask cloth) exclude each other\n");
+        return 2;
+    }
+    if (opt.samples > 1 && (opt.square || opt.square_outline)) {
+        std::fprintf(stderr, "drape_textile: --samples takes the circle (outline or --mask-circle): a square has one "
+                             "mesh on the weave's grid\n");
         return 2;
     }
     if (cmd == "elastica") return cmd_elastica();

@@ -17,8 +17,11 @@ struct Options {
     double max_time = 0.0;           ///< cusick: settling time limit, s (0: the default, 6 s)
     bool square = false;              ///< cusick: the 30 cm square grid cloth instead of the standard 30 cm circle
     bool square_outline = false;      ///< cusick: the 30 cm square as an outline cloth (the circle's mesh model)
+    bool mask_circle = false;         ///< cusick: the 30 cm circle as a mask cloth (grid cells within the circle)
     std::string png_dir;
     std::vector<std::string> fabrics;
+    int samples = 1;    ///< cusick: meshes of each specimen (other lattice phases of the same circle), mean DC reported
+    double shear = 0.0; ///< cusick: > 0 replaces each preset's in-plane shear stiffness, N/m (a diagnostic)
 };
 
 int cmd_cantilever(const Options& opt);
