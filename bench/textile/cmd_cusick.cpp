@@ -234,7 +234,7 @@ int cmd_cusick(const Options& opt) {
             Fabric fabric = textile_fabric(name);
             if (opt.shear > 0.0) fabric.shear = static_cast<float>(opt.shear);
             std::vector<double> dcs;
-            Summary sum{name, h, 0.0, 0.0, 1.0, 0.0, ""};
+            Summary sum{name, h, 0.0, 0.0, HUGE_VAL, -HUGE_VAL, ""};
             for (int k = 0; k < samples; ++k) {
                 const double phase = double(k) / double(samples);
                 const CusickResult r =
