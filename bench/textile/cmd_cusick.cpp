@@ -90,6 +90,17 @@ CusickResult run_cusick_square(const Fabric& fabric, double spacing, double drag
     return r;
 }
 
+/// A scene of the fabric model named for the test; the caller fills in the cloth.
+SceneSpec cusick_spec(ClothType cloth, const Fabric& fabric) {
+    SceneSpec spec;
+    spec.name = "cusick";
+    spec.source = "drape_textile cusick";
+    spec.cloth = cloth;
+    spec.model = MaterialModel::fabric;
+    spec.fabric = fabric;
+    return spec;
+}
+
 /// Vertices of the circular specimen's polygon at spacing h: about one per h of perimeter (the outline is sampled
 /// at spacing <= h anyway, so more vertices would only add short edges), at least 32.
 std::uint32_t circle_vertices(double spacing) {
@@ -105,12 +116,7 @@ std::uint32_t circle_vertices(double spacing) {
 CusickResult run_cusick_outline(const Fabric& fabric, double spacing, double drag, double max_time, bool square,
                                 double phase) {
     CusickResult r;
-    SceneSpec spec;
-    spec.name = "cusick";
-    spec.source = "drape_textile cusick";
-    spec.cloth = ClothType::outline;
-    spec.model = MaterialModel::fabric;
-    spec.fabric = fabric;
+    SceneSpec spec = cusick_spec(ClothType::outline, fabric);
     OutlineClothSpec& o = spec.outline;
     const std::uint32_t nv = square ? 4 : circle_vertices(spacing);
     const double half = 0.5 * specimen_side;
@@ -143,14 +149,10 @@ CusickResult run_cusick_outline(const Fabric& fabric, double spacing, double dra
 /// circle; the specimen stays centred on the disc).
 CusickResult run_cusick_mask_circle(const Fabric& fabric, double spacing, double drag, double max_time, double phase) {
     CusickResult r;
-    SceneSpec spec;
-    spec.name = "cusick";
-    spec.source = "drape_textile cusick";
-    spec.cloth = ClothType::mask;
-    spec.model = MaterialModel::fabric;
-    spec.fabric = fabric;
+    SceneSpec spec = cusick_spec(ClothType::mask, fabric);
     const auto cells = static_cast<std::uint32_t>(std::floor(2.0 * specimen_radius / spacing)) + 2;
-    const double mid_u = 0.5 * double(cells - 2) + phase, mid_v = 0.5 * double(cells - 2) + (3.0 * phase - std::floor(3.0 * phase));
+    const double mid_u = 0.5 * double(cells - 2) + phase;
+    const double mid_v = 0.5 * double(cells - 2) + (3.0 * phase - std::floor(3.0 * phase));
     MaskPanelSpec panel;
     panel.name = "specimen";
     panel.cell_size = static_cast<float>(spacing);
