@@ -11,6 +11,7 @@
 #include "drape/scene.hpp"
 #include "drape/scene_hang.hpp"
 #include "drape/stability.hpp"
+#include "drape/triangle_fabric.hpp"
 #include "drape_measure.hpp"
 #include "harness.hpp"
 #include "textile_commands.hpp"
@@ -173,16 +174,10 @@ CusickResult run_cusick_mask_circle(const Fabric& fabric, double spacing, double
     spec.physics.colliders = cusick_colliders(surface);
     BuiltScene scene = build_scene(spec);
     r.n = cells;
-    const std::vector<float>& x = scene.initial.x;
-    const std::vector<float>& z = scene.initial.z;
-    const std::vector<std::uint32_t>& t = scene.cloth.triangles;
-    double area = 0.0;
-    for (std::size_t k = 0; k + 2 < t.size(); k += 3) {
-        const double ux = double(x[t[k + 1]]) - x[t[k]], uz = double(z[t[k + 1]]) - z[t[k]];
-        const double vx = double(x[t[k + 2]]) - x[t[k]], vz = double(z[t[k + 2]]) - z[t[k]];
-        area += 0.5 * std::fabs(ux * vz - uz * vx);
-    }
-    r.specimen_area = area;
+    // The flat specimen's area: its triangles' (lumped masses at unit density sum to it).
+    r.specimen_area = 0.0;
+    for (double a : lumped_masses(scene.initial.x, scene.initial.y, scene.initial.z, scene.cloth.triangles, 1.0))
+        r.specimen_area += a;
     settle_and_measure(std::move(scene.cloth), scene.initial, scene.params, max_time, r);
     return r;
 }
@@ -214,7 +209,7 @@ int cmd_cusick(const Options& opt) {
                 "a row; else %.0f s); shadow rasterised at 0.5 mm; DC = (shadow - disc) / (specimen - disc)\n\n",
                 disc_radius * 1e3, (drop_height + 0.001) * 1e3, drag, max_time);
     if (opt.shear > 0.0) std::printf("Every fabric's shear stiffness replaced by %g N/m (--shear)\n\n", opt.shear);
-    const int samples = std::max(1, opt.samples);
+    const int samples = opt.samples; // [1, 64], checked by main
     if (samples > 1)
         std::printf("%d meshes of each specimen (sample k: %s k / %d); the summary gives their mean DC and its "
                     "sample standard deviation\n\n",
@@ -227,7 +222,8 @@ int cmd_cusick(const Options& opt) {
     std::printf("|---|---:|%s---:|---:|---:|---:|---:|---:|---:|---:|\n", samples > 1 ? "---:|" : "");
     struct Summary {
         std::string fabric;
-        double h = 0.0, mean = 0.0, sd = 0.0, lo = 0.0, hi = 0.0;
+        double h = 0.0;
+        std::vector<double> dc; ///< one per sample
         std::string folds;
     };
     std::vector<Summary> summary;
@@ -235,8 +231,7 @@ int cmd_cusick(const Options& opt) {
         for (double h : spacings) {
             Fabric fabric = textile_fabric(name);
             if (opt.shear > 0.0) fabric.shear = static_cast<float>(opt.shear);
-            std::vector<double> dcs;
-            Summary sum{name, h, 0.0, 0.0, HUGE_VAL, -HUGE_VAL, ""};
+            Summary sum{name, h, {}, ""};
             for (int k = 0; k < samples; ++k) {
                 const double phase = double(k) / double(samples);
                 const CusickResult r =
@@ -250,9 +245,7 @@ int cmd_cusick(const Options& opt) {
                             r.r_max * 1e3, r.settle.sim_time, r.settle.settled ? "" : " (not settled)", r.settle.steps,
                             r.settle.wall);
                 std::fflush(stdout);
-                dcs.push_back(r.dc);
-                sum.lo = std::min(sum.lo, r.dc);
-                sum.hi = std::max(sum.hi, r.dc);
+                sum.dc.push_back(r.dc);
                 sum.folds += (k ? " / " : "") + std::to_string(r.folds);
                 if (!opt.png_dir.empty() && h == spacings.back() && k == 0) {
                     const std::string path = opt.png_dir + (square                ? "/cusick_"
@@ -266,16 +259,19 @@ int cmd_cusick(const Options& opt) {
                         std::printf("\n(wrote %s)\n\n", path.c_str());
                 }
             }
-            for (double d : dcs) sum.mean += d / double(dcs.size());
-            for (double d : dcs) sum.sd += (d - sum.mean) * (d - sum.mean);
-            sum.sd = dcs.size() > 1 ? std::sqrt(sum.sd / double(dcs.size() - 1)) : 0.0;
             summary.push_back(sum);
         }
     if (samples > 1) {
         std::printf("\n| fabric | h (mm) | DC mean | DC sd | DC min - max | folds |\n|---|---:|---:|---:|---|---|\n");
-        for (const Summary& m : summary)
-            std::printf("| %s | %.1f | %.3f | %.3f | %.3f - %.3f | %s |\n", m.fabric.c_str(), m.h * 1e3, m.mean, m.sd,
-                        m.lo, m.hi, m.folds.c_str());
+        for (const Summary& m : summary) {
+            const double n = double(m.dc.size());
+            double mean = 0.0, ss = 0.0;
+            for (double d : m.dc) mean += d / n;
+            for (double d : m.dc) ss += (d - mean) * (d - mean);
+            const auto [lo, hi] = std::minmax_element(m.dc.begin(), m.dc.end());
+            std::printf("| %s | %.1f | %.3f | %.3f | %.3f - %.3f | %s |\n", m.fabric.c_str(), m.h * 1e3, mean,
+                        std::sqrt(ss / (n - 1.0)), *lo, *hi, m.folds.c_str());
+        }
     }
     return 0;
 }
