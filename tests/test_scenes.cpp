@@ -174,6 +174,14 @@ INSTANTIATE_TEST_SUITE_P(
                 "physics.self_collision.substeps = 17 is outside the allowed range [1, 16]"},
         BadFile{"self_collision_substeps_fraction", R"({"physics": {"self_collision": {"substeps": 1.5}}})",
                 "physics.self_collision.substeps must be a whole number in [1, 16]"},
+        // Out-of-range numbers are echoed as the file wrote them: every digit of a huge integer (not
+        // 1.84467e+19), and a value just past a bound not rounded onto it ("1.0000001", not "1").
+        BadFile{"huge_integer", R"({"physics": {"self_collision": {"substeps": 18446744073709551615}}})",
+                "physics.self_collision.substeps = 18446744073709551615 is outside the allowed range [1, 16]"},
+        BadFile{"just_past_bound", R"({"physics": {"implicit": {"tolerance": 1.0000001}}})",
+                "physics.implicit.tolerance = 1.0000001 is outside the allowed range [0, 1]"},
+        BadFile{"huge_gravity", R"({"physics": {"gravity": [0, -123456789012, 0]}})",
+                "physics.gravity[1] = -123456789012 is outside the allowed range"},
         // Numbers a double cannot hold, and NaN / Infinity (not JSON): a range error at the field, never an abort.
         BadFile{"overflow_n", R"({"cloth": {"n": 1e400}})",
                 "cloth.n = 1e400 is not a finite number; allowed range [2, 4096]"},

@@ -260,6 +260,8 @@ class ObjectReader {
     [[noreturn]] void fail(const std::string& where, const std::string& what) const {
         throw FieldError(source_ + ": " + printable(where, 160) + " " + what);
     }
+    /// A number as the file wrote it (every digit of 18446744073709551615, 1.0000001 not "1"), shortened.
+    static std::string written(const json& v) { return shorten(v.dump()); }
     std::string at(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
     /// Refuses a number the file wrote that is not finite (1e400, NaN): `range` is the field's allowed range.
     void check_finite(const std::string& where, const std::string& range) const {
@@ -281,7 +283,7 @@ class ObjectReader {
         if (!v.is_number()) fail(at(key), "must be a number in [" + format_number(lo) + ", " + format_number(hi) + "]" + unit);
         const double d = v.get<double>();
         if (!(d >= lo && d <= hi))
-            fail(at(key), "= " + format_number(d) + " is outside the allowed range [" + format_number(lo) + ", " +
+            fail(at(key), "= " + written(v) + " is outside the allowed range [" + format_number(lo) + ", " +
                               format_number(hi) + "]" + unit);
         return d;
     }
@@ -294,7 +296,7 @@ class ObjectReader {
             fail(at(key), "must be a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
         const double d = v.get<double>();
         if (!(d >= lo && d <= hi))
-            fail(at(key), "= " + format_number(d) + " is outside the allowed range [" + std::to_string(lo) + ", " +
+            fail(at(key), "= " + written(v) + " is outside the allowed range [" + std::to_string(lo) + ", " +
                               std::to_string(hi) + "]");
         return static_cast<std::uint32_t>(d);
     }
@@ -338,7 +340,7 @@ class ObjectReader {
             if (!v[k].is_number()) fail(at(key) + "[" + std::to_string(k) + "]", "must be a number");
             const double d = v[k].get<double>();
             if (!(std::fabs(d) <= limit))
-                fail(at(key) + "[" + std::to_string(k) + "]", "= " + format_number(d) + " is outside the allowed range [-" +
+                fail(at(key) + "[" + std::to_string(k) + "]", "= " + written(v[k]) + " is outside the allowed range [-" +
                                                                   format_number(limit) + ", " + format_number(limit) +
                                                                   "]" + unit);
             out[k] = d;
