@@ -111,6 +111,27 @@ TEST_P(BrokenScene, GivesAClearError) {
     EXPECT_TRUE(has(msg, c.expect)) << c.name << ": " << msg;
 }
 
+// An outline with a spike far narrower than its spacing: the fabric model's needle triangles there were refused as
+// "spring 128-180 has stiffness scale 2225.7", naming no field of the file and no place in the outline.
+TEST(Scene, OutlineNarrowerThanItsSpacingIsRefusedNamingWhere) {
+    const std::string spike = R"({ "cloth": { "type": "outline", "spacing": 0.02, "pins": "top_edge",
+        "outline": [[0, 0], [1, 0], [1, 1], [0.5, 1], [0.50001, 1.5], [0.49999, 1], [0, 1]] },
+        "material": { "fabric": "wool" } })";
+    std::string msg;
+    try {
+        build_scene(parse_scene(spike, "test.json"));
+    } catch (const InvalidInput& e) {
+        msg = e.what();
+    }
+    EXPECT_TRUE(has(msg, "test.json: cloth.outline at cloth.spacing = 0.02 m: near (0.5, 1.")) << msg;
+    EXPECT_TRUE(has(msg, "narrower than the spacing")) << msg;
+    EXPECT_TRUE(has(msg, "widen the outline there, or lower cloth.spacing")) << msg;
+    // The same outline without the spike builds.
+    const std::string square = R"({ "cloth": { "type": "outline", "spacing": 0.02, "pins": "top_edge",
+        "outline": [[0, 0], [1, 0], [1, 1], [0, 1]] }, "material": { "fabric": "wool" } })";
+    EXPECT_NO_THROW(build_scene(parse_scene(square, "test.json")));
+}
+
 TEST(Scene, NulByteIsRefused) {
     const std::string text = std::string("{}") + '\0' + R"({"cloth": {"n": 1e400}})";
     ASSERT_EQ(text.size(), 26u);

@@ -1414,6 +1414,34 @@ void apply_state(const SceneState& st, BuiltScene& out) {
 namespace {
 
 /// cloth.type = "outline": the panel (and its sewn copy) at the spec's spacing, pinned along the top when asked.
+/// Fabric model: an outline narrower than its spacing somewhere (a spike a fraction of the spacing wide) is
+/// triangulated there into needles, whose short edge's membrane spring is far stiffer than the fabric (k = E A /
+/// l^2); past the cook's limit (1000 x the fabric's mean stretch stiffness) the file is refused here, naming the
+/// place in the outline's coordinates (cu, cv: the outline's centre) rather than two particle numbers.
+void check_outline_needles(const SceneSpec& s, const GarmentAssembly& a, float cu, float cv) {
+    std::vector<Edge> edges;
+    for (const Edge& e : a.edges)
+        if (e.kind == SpringKind::structural || e.kind == SpringKind::shear) edges.push_back(e);
+    const std::vector<double> k = membrane_stiffness(a.x, a.y, a.z, a.triangles, edges, s.fabric, {1.0f, 0.0f, 0.0f},
+                                                     WeaveAlignment::aligned);
+    const double k_ref = 0.5 * (double(s.fabric.stretch_u) + s.fabric.stretch_v);
+    std::size_t worst = 0;
+    for (std::size_t e = 1; e < k.size(); ++e)
+        if (k[e] > k[worst]) worst = e;
+    if (k.empty() || !(k[worst] > 1e3 * k_ref)) return;
+    const Edge& e = edges[worst];
+    const bool horizontal = s.outline.plane == GridPlane::horizontal;
+    const double u = 0.5 * (double(a.x[e.a]) + a.x[e.b]) + cu,
+                 v = (horizontal ? 0.5 * (double(a.z[e.a]) + a.z[e.b]) : -0.5 * (double(a.y[e.a]) + a.y[e.b])) + cv;
+    char msg[400];
+    std::snprintf(msg, sizeof msg,
+                  ": cloth.outline at cloth.spacing = %g m: near (%.4g, %.4g) the outline is narrower than the spacing "
+                  "(a spike or a slit): its triangles there are needles whose short edge would be %.0f times as stiff "
+                  "as the fabric (at most 1000); widen the outline there, or lower cloth.spacing",
+                  double(s.outline.spacing), u, v, k[worst] / k_ref);
+    throw InvalidInput((s.source.empty() ? std::string("scene") : s.source) + msg);
+}
+
 void build_outline_cloth(const SceneSpec& s, BuiltScene& out) {
     const OutlineClothSpec& o = s.outline;
     double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
@@ -1463,6 +1491,7 @@ void build_outline_cloth(const SceneSpec& s, BuiltScene& out) {
         for (std::size_t i = 0; i < a.particle_count(); ++i)
             if ((vertical ? a.y[i] : a.z[i]) >= top - 0.25f * o.spacing) inv_mass[i] = 0.0f;
     }
+    if (s.model == MaterialModel::fabric) check_outline_needles(s, a, cu, cv);
     cook_assembly(s, a, inv_mass, free_inv_mass, out);
     out.cloth.origin = {double(o.centre[0]), double(o.centre[1]), double(o.centre[2])};
 }
