@@ -193,6 +193,11 @@ std::filesystem::path temp_dir() {
     return dir;
 }
 
+std::string read_text(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
 TEST(SceneWrite, EveryScenesRoundTripsToTheSameSpecAndCloth) {
     const auto scenes = all_scenes();
     EXPECT_GE(scenes.size(), builtin_scene_names().size() + 1); // the examples too
@@ -515,6 +520,25 @@ TEST(SceneWrite, SaveIsAtomicAndFailuresNameThePath) {
         EXPECT_TRUE(has(e.what(), never) && has(e.what(), "would not load back") && has(e.what(), "cloth.mass")) << e.what();
     }
     EXPECT_FALSE(std::filesystem::exists(never));
+    // A state too large for a scene file (600 x 600 particles, about 27 MiB of text) is refused as what it is, and the
+    // file already there is kept (the message read "file is larger than 16 MiB", as if the existing file were).
+    {
+        SceneSpec big = load_scene("hang");
+        big.grid.n = 600;
+        SceneState st;
+        for (auto* v : {&st.x, &st.y, &st.z, &st.vx, &st.vy, &st.vz})
+            v->assign(std::size_t{600} * 600, 0.123456789f);
+        const std::string before = read_text(file);
+        try {
+            save_scene(file, big, &st);
+            ADD_FAILURE() << "wrote a scene file over 16 MiB";
+        } catch (const InvalidInput& e) {
+            EXPECT_TRUE(has(e.what(), file + ": not written: the scene with its state would be")) << e.what();
+            EXPECT_TRUE(has(e.what(), "MiB, over the 16 MiB a scene file may hold")) << e.what();
+            EXPECT_TRUE(has(e.what(), "save it without the state")) << e.what();
+        }
+        EXPECT_EQ(read_text(file), before);
+    }
     // Saving through a symbolic link writes the file it points to and keeps the link.
     std::filesystem::create_directory(dir / "real");
     const std::filesystem::path real = dir / "real" / "target.json", link = dir / "link.json";

@@ -892,7 +892,7 @@ std::vector<std::string> builtin_scene_names() {
 // A function-try-block: whatever nlohmann throws (a type or range error the reader did not foresee) becomes
 // InvalidInput naming the file; nothing else escapes but InvalidInput and std::bad_alloc.
 SceneSpec parse_scene(const std::string& text, const std::string& source, const std::string& base_dir) try {
-    if (text.size() > (std::size_t{16} << 20)) throw InvalidInput(source + ": file is larger than 16 MiB");
+    if (text.size() > scene_file_max_bytes) throw InvalidInput(source + ": file is larger than 16 MiB");
     NonFiniteNumbers non_finite;
     const json doc = parse_json(text, source, non_finite);
     ObjectReader root(doc, "", source, &non_finite);
@@ -1144,7 +1144,7 @@ SceneSpec load_scene(const std::string& name_or_path) {
         std::snprintf(mib, sizeof mib, "%.1f", double(bytes) / (1024.0 * 1024.0));
         return InvalidInput(path + ": the file is " + mib + " MiB; scene files are limited to 16 MiB");
     };
-    if (std::uintmax_t(st.st_size) > (std::uintmax_t{16} << 20)) throw too_big(std::uintmax_t(st.st_size));
+    if (std::uintmax_t(st.st_size) > std::uintmax_t(scene_file_max_bytes)) throw too_big(std::uintmax_t(st.st_size));
 
     // Opened without blocking and checked again on the descriptor: the path may have been replaced since the stat.
     const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
@@ -1168,12 +1168,12 @@ SceneSpec load_scene(const std::string& name_or_path) {
             }
             if (got == 0) break;
             text.append(buf, static_cast<std::size_t>(got));
-            if (text.size() > (std::size_t{16} << 20)) break;
+            if (text.size() > scene_file_max_bytes) break;
         }
     }
     ::close(fd);
     if (!failure.empty()) throw InvalidInput(path + ": " + failure);
-    if (text.size() > (std::size_t{16} << 20)) throw too_big(text.size());
+    if (text.size() > scene_file_max_bytes) throw too_big(text.size());
     return parse_scene(text, name_or_path, std::filesystem::path(name_or_path).parent_path().string());
 }
 

@@ -355,6 +355,15 @@ void save_scene(const std::string& path, const SceneSpec& spec, const SceneState
         throw std::runtime_error(path + ": cannot write the scene file (a loop of symbolic links)");
     const std::filesystem::path dir = given.parent_path();
     const std::string text = to_json(spec, state, dir.empty() ? std::filesystem::path(".") : dir);
+    if (text.size() > scene_file_max_bytes) { // load_scene's limit: said here as what it is, not as a load error
+        char msg[300];
+        std::snprintf(msg, sizeof msg,
+                      ": not written: the scene%s would be %.1f MiB, over the %zu MiB a scene file may hold; "
+                      "nothing was changed on disk%s",
+                      state ? " with its state" : "", double(text.size()) / double(1 << 20), scene_file_max_bytes >> 20,
+                      state ? " (save it without the state, or a cloth of fewer particles)" : "");
+        throw InvalidInput(path + msg);
+    }
     try {
         (void)parse_scene(text, path, dir.string());
     } catch (const InvalidInput& e) {

@@ -134,6 +134,9 @@ struct SceneSpec {
 /// Names of the built-in scenes, in a fixed order: hang, drape, sphere, flag, tshirt.
 std::vector<std::string> builtin_scene_names();
 
+/// The largest scene file load_scene and parse_scene read (and save_scene writes), bytes: 16 MiB.
+inline constexpr std::size_t scene_file_max_bytes = std::size_t{16} << 20;
+
 /// Parses and validates scene JSON. `source` names the file in messages. Throws InvalidInput naming the source, the
 /// field as a JSON path (e.g. "cloth.n") and the allowed range; unknown fields are errors. Relative file names in the
 /// scene (cloth.file) are resolved against `base_dir` (empty: the current directory); a mesh cloth's OBJ is read here.

@@ -20,8 +20,9 @@ namespace drape {
 std::string scene_to_json(const SceneSpec& spec, const SceneState* state = nullptr);
 
 /// Writes scene_to_json to path atomically (temp file + rename). Before writing, the text is read back with
-/// parse_scene, so a file that would not load is never written (InvalidInput with parse_scene's message, e.g. a
-/// state making the file larger than 16 MiB). Throws std::runtime_error naming the path on failure.
+/// parse_scene, so a file that would not load is never written (InvalidInput with parse_scene's message); a text
+/// over scene_file_max_bytes (a large cloth's state) is refused first, saying so. Throws std::runtime_error naming
+/// the path on failure.
 void save_scene(const std::string& path, const SceneSpec& spec, const SceneState* state = nullptr);
 
 /// The current state of a simulation, for save_scene: positions, velocities (Simulation::velocity) and the pinned
