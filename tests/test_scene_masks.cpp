@@ -235,6 +235,31 @@ TEST(SceneMasks, BrokenFilesGiveClearErrors) {
                     "cloth.panels[0].rows has 4097 entries (at most 4096)"));
 }
 
+// A '1' touching no other '1' and no seam was a loose particle: a checkerboard mask ran "healthy" with 0 springs.
+TEST(SceneMasks, LooseCellsAreRefusedNamingTheFirst) {
+    const auto build_error = [](const std::string& rows, const std::string& seams = "") {
+        const std::string text = R"({"cloth": {"type": "mask", "panels": [{"name": "a", "rows": )" + rows +
+                                 R"(}, {"name": "b", "rows": ["11", "11"], "origin": [0, 0, 0.1]}], "seams": [)" + seams +
+                                 "]}}";
+        try {
+            build_scene(parse_scene(text, "test.json"));
+        } catch (const InvalidInput& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    std::string msg = build_error(R"(["101", "010", "101"])");
+    EXPECT_TRUE(has(msg, "test.json: cloth.panels[0] \"a\": the '1' at row 0, column 0 touches no other '1'")) << msg;
+    EXPECT_TRUE(has(msg, "(5 such cells in the cloth)")) << msg;
+    msg = build_error(R"(["110", "010", "001"])");
+    EXPECT_TRUE(has(msg, "the '1' at row 2, column 2") && has(msg, "(1 such cell in the cloth)")) << msg;
+    // Joined across a cell's corner with a shared neighbour, or sewn: accepted.
+    EXPECT_EQ(build_error(R"(["110", "011"])"), "");
+    EXPECT_EQ(build_error(R"(["11", "11", "00", "01"])",
+                          R"({"a": {"panel": "a", "path": [[3, 1]]}, "b": {"panel": "b", "path": [[0, 0]]}})"),
+              "");
+}
+
 // load -> save -> load gives the same cloth: particles, positions, masses, pins, springs (kind, ends, rest).
 TEST(SceneMasks, RoundTripThroughSceneFiles) {
     for (const std::string& source : {std::string(tube), std::string("tank_top")}) {

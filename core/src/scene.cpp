@@ -1332,6 +1332,26 @@ void build_mask_cloth(const SceneSpec& s, BuiltScene& out) {
             a.edges.push_back({lo_i, hi_i, SpringKind::seam, rest});
         }
     }
+    // A '1' with no '1' beside, above or below it (or across a corner with a shared neighbour) and no seam would be
+    // a loose particle falling on its own: refused, naming the first such cell (a checkerboard mask ran "healthy"
+    // with 0 springs).
+    std::vector<std::uint32_t> degree(a.particle_count(), 0);
+    for (const Edge& e : a.edges)
+        ++degree[e.a], ++degree[e.b];
+    const std::size_t loose = std::size_t(std::count(degree.begin(), degree.end(), 0u));
+    for (std::size_t k = 0; k < panels.size() && loose > 0; ++k)
+        for (std::size_t cell = 0; cell < panels[k].cell_particle.size(); ++cell) {
+            const std::int32_t i = panels[k].cell_particle[cell];
+            if (i < 0 || degree[std::size_t(i)] > 0) continue;
+            throw InvalidInput(s.source + ": cloth.panels[" + std::to_string(k) + "] \"" +
+                               printable(m.panels[k].name, 64) + "\": the '1' at row " +
+                               std::to_string(cell / panels[k].columns) + ", column " +
+                               std::to_string(cell % panels[k].columns) +
+                               " touches no other '1' (beside, above or below it) and no seam: it would be a loose "
+                               "particle falling on its own (" + std::to_string(loose) +
+                               (loose == 1 ? " such cell" : " such cells") +
+                               " in the cloth); join it to the panel or make it '0'");
+        }
     std::vector<float> inv_mass = a.inverse_masses();
     const std::vector<float> free_inv_mass = inv_mass;
     for (std::size_t k = 0; k < panels.size(); ++k) {
