@@ -1439,12 +1439,33 @@ namespace {
 /// l^2); past the cook's limit (1000 x the fabric's mean stretch stiffness) the file is refused here, naming the
 /// place in the outline's coordinates (cu, cv: the outline's centre) rather than two particle numbers.
 void check_outline_needles(const SceneSpec& s, const GarmentAssembly& a, float cu, float cv) {
+    const double k_ref = 0.5 * (double(s.fabric.stretch_u) + s.fabric.stretch_v);
+    // First a bound, O(triangles): an edge's k is at most sum over its (at most 2 here) triangles of
+    // max(stretch_u, stretch_v) A / l^2. Only a mesh that may pass the limit pays for the exact stiffnesses.
+    const double e_max = std::max(double(s.fabric.stretch_u), double(s.fabric.stretch_v));
+    double worst_ratio = 0.0; // max A / l^2
+    for (std::size_t t = 0; t + 2 < a.triangles.size(); t += 3) {
+        const std::uint32_t v[3] = {a.triangles[t], a.triangles[t + 1], a.triangles[t + 2]};
+        const auto d = [&](int i, int j, int k) {
+            return k == 0 ? double(a.x[v[j]]) - a.x[v[i]] : k == 1 ? double(a.y[v[j]]) - a.y[v[i]]
+                                                                   : double(a.z[v[j]]) - a.z[v[i]];
+        };
+        const double ux = d(0, 1, 0), uy = d(0, 1, 1), uz = d(0, 1, 2), wx = d(0, 2, 0), wy = d(0, 2, 1),
+                     wz = d(0, 2, 2);
+        const double cx = uy * wz - uz * wy, cy = uz * wx - ux * wz, cz = ux * wy - uy * wx;
+        const double area = 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
+        for (int e = 0; e < 3; ++e) {
+            const double ex = d(e, (e + 1) % 3, 0), ey = d(e, (e + 1) % 3, 1), ez = d(e, (e + 1) % 3, 2);
+            const double l2 = ex * ex + ey * ey + ez * ez;
+            if (l2 > 0.0) worst_ratio = std::max(worst_ratio, area / l2);
+        }
+    }
+    if (!(2.0 * worst_ratio * e_max > 1e3 * k_ref)) return;
     std::vector<Edge> edges;
     for (const Edge& e : a.edges)
         if (e.kind == SpringKind::structural || e.kind == SpringKind::shear) edges.push_back(e);
     const std::vector<double> k = membrane_stiffness(a.x, a.y, a.z, a.triangles, edges, s.fabric, {1.0f, 0.0f, 0.0f},
                                                      WeaveAlignment::aligned);
-    const double k_ref = 0.5 * (double(s.fabric.stretch_u) + s.fabric.stretch_v);
     std::size_t worst = 0;
     for (std::size_t e = 1; e < k.size(); ++e)
         if (k[e] > k[worst]) worst = e;
