@@ -132,6 +132,19 @@ TEST(Scene, OutlineNarrowerThanItsSpacingIsRefusedNamingWhere) {
     EXPECT_NO_THROW(build_scene(parse_scene(square, "test.json")));
 }
 
+// A file nested millions of levels deep was refused cleanly but only after using about 1 GB: the reader stops at 256.
+TEST(Scene, DeepNestingIsRefusedEarly) {
+    const std::size_t depth = 1000000;
+    const std::string text = R"({"cloth": )" + std::string(depth, '[') + std::string(depth, ']') + "}";
+    const std::string msg = scene_error_of(text);
+    EXPECT_TRUE(has(msg, "test.json: arrays and objects nested more than 256 deep (at cloth")) << msg.substr(0, 300);
+    EXPECT_TRUE(has(msg, "a scene file nests at most a few levels")) << msg.substr(0, 300);
+    EXPECT_LT(msg.size(), 400u);
+    // 255 levels are read (and refused for what they hold, not for their depth).
+    const std::string ok = scene_error_of(R"({"cloth": )" + std::string(254, '[') + std::string(254, ']') + "}");
+    EXPECT_FALSE(has(ok, "nested more than")) << ok.substr(0, 300);
+}
+
 TEST(Scene, NulByteIsRefused) {
     const std::string text = std::string("{}") + '\0' + R"({"cloth": {"n": 1e400}})";
     ASSERT_EQ(text.size(), 26u);

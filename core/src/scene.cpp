@@ -85,6 +85,7 @@ class PathTrackingParser {
     bool string(string_t& v) { return value(dom_.string(v)); }
     bool binary(binary_t& v) { return value(dom_.binary(v)); }
     bool start_object(std::size_t n) {
+        if (too_deep()) return false;
         frames_.push_back({false, 0, {}, {}});
         return dom_.start_object(n);
     }
@@ -102,6 +103,7 @@ class PathTrackingParser {
         return value(dom_.end_object());
     }
     bool start_array(std::size_t n) {
+        if (too_deep()) return false;
         frames_.push_back({true, 0, {}, {}});
         return dom_.start_array(n);
     }
@@ -138,6 +140,10 @@ class PathTrackingParser {
     int error_id = 0;
     std::string error_token, error_message, error_path;
     std::string duplicate_path; ///< set when a key appears twice in one object (the parse stops there)
+    /// Arrays and objects nested deeper than this stop the parse (a scene nests 5 deep; 8 million levels took
+    /// about 1 GB before being refused): deep_path is then set.
+    static constexpr std::size_t max_depth = 256;
+    std::string deep_path;
 
   private:
     struct Frame {
@@ -146,6 +152,11 @@ class PathTrackingParser {
         std::string key;
         std::unordered_set<std::string> keys; ///< an object's keys so far
     };
+    bool too_deep() {
+        if (frames_.size() < max_depth) return false;
+        deep_path = path();
+        return true;
+    }
     /// After a value (scalar or closed container): the next array element has the next index.
     bool value(bool ok) {
         if (!frames_.empty() && frames_.back().array) ++frames_.back().index;
@@ -219,6 +230,10 @@ json parse_json(std::string text, const std::string& source, NonFiniteNumbers& n
         json doc;
         PathTrackingParser parser(doc);
         if (json::sax_parse(text, &parser)) return doc;
+        if (!parser.deep_path.empty())
+            throw InvalidInput(source + ": arrays and objects nested more than " +
+                               std::to_string(PathTrackingParser::max_depth) + " deep (at " +
+                               printable(parser.deep_path, 160) + "); a scene file nests at most a few levels");
         if (!parser.duplicate_path.empty())
             throw InvalidInput(source + ": " + printable(parser.duplicate_path, 160) +
                                " appears twice in one object (each key once)");
