@@ -191,7 +191,7 @@ int cmd_cusick(const Options& opt) {
     std::vector<double> spacings = opt.quick ? std::vector<double>{0.02, 0.01} : std::vector<double>{0.02, 0.01, 0.005};
     if (opt.fine) spacings.push_back(0.0025);
     if (!opt.spacings.empty()) spacings = opt.spacings;
-    const double drag = 2.0, max_time = opt.max_time > 0.0 ? opt.max_time : 6.0;
+    const double drag = opt.drag > 0.0 ? opt.drag : 2.0, max_time = opt.max_time > 0.0 ? opt.max_time : 6.0;
     const bool square = opt.square;
     if (square)
         std::printf("Cusick drape test: square specimen %.0f cm (grid cloth, N x N particles)", specimen_side * 100.0);

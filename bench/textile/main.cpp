@@ -15,7 +15,8 @@
 // grid specimen instead of the circle; --max-time S (cusick) settling time limit (default 6 s); --shear G (cusick)
 // replaces each fabric's in-plane shear stiffness by G N/m (G = stretch / 2 makes a woven's edge modulus the same in
 // every direction: a diagnostic of the weave-aligned edge springs); --samples K (cusick, circle) K meshes of each
-// specimen (the circle turned, or moved off the cell lattice, by k / K of a step), with the mean DC and its spread.
+// specimen (the circle turned, or moved off the cell lattice, by k / K of a step), with the mean DC and its spread;
+// --drag D (cusick) the air drag while the specimen falls and settles, 1/s (default 2; higher lowers it more slowly).
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
@@ -89,6 +90,13 @@ int main(int argc, char** argv) {
             opt.shear = std::atof(argv[++a]);
             if (!(opt.shear >= 0.01 && opt.shear <= 1e6)) {
                 std::fprintf(stderr, "drape_textile: --shear must be in [0.01, 1e6] N/m\n");
+                return 2;
+            }
+        }
+        else if (s == "--drag" && a + 1 < argc) {
+            opt.drag = std::atof(argv[++a]);
+            if (!(opt.drag >= 0.1 && opt.drag <= 100.0)) {
+                std::fprintf(stderr, "drape_textile: --drag must be in [0.1, 100] 1/s\n");
                 return 2;
             }
         }

@@ -22,6 +22,7 @@ struct Options {
     std::vector<std::string> fabrics;
     int samples = 1;    ///< cusick: meshes of each specimen (other lattice phases of the same circle), mean DC reported
     double shear = 0.0; ///< cusick: > 0 replaces each preset's in-plane shear stiffness, N/m (a diagnostic)
+    double drag = 0.0;  ///< cusick: air drag while the specimen falls and settles, 1/s (0: the default, 2 1/s)
 };
 
 int cmd_cantilever(const Options& opt);
