@@ -1448,7 +1448,6 @@ void apply_state(const SceneState& st, BuiltScene& out) {
 
 namespace {
 
-/// cloth.type = "outline": the panel (and its sewn copy) at the spec's spacing, pinned along the top when asked.
 /// Fabric model: an outline narrower than its spacing somewhere (a spike a fraction of the spacing wide) is
 /// triangulated there into needles, whose short edge's membrane spring is far stiffer than the fabric (k = E A /
 /// l^2); past the cook's limit (1000 x the fabric's mean stretch stiffness) the file is refused here, naming the
@@ -1498,6 +1497,7 @@ void check_outline_needles(const SceneSpec& s, const GarmentAssembly& a, float c
     throw InvalidInput((s.source.empty() ? std::string("scene") : s.source) + msg);
 }
 
+/// cloth.type = "outline": the panel (and its sewn copy) at the spec's spacing, pinned along the top when asked.
 void build_outline_cloth(const SceneSpec& s, BuiltScene& out) {
     const OutlineClothSpec& o = s.outline;
     double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
