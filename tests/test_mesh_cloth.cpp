@@ -277,6 +277,30 @@ TEST(MeshCloth, BrokenObjFilesGiveOneClearLine) {
     EXPECT_TRUE(has(load_error(flat), "cloth.pins = \"top\" would pin every particle of this mesh (all 3")) << load_error(flat);
 }
 
+// A needle (a short edge across wide triangles) in an OBJ cloth of the fabric model: its membrane spring would be far
+// stiffer than the fabric; the refusal names the OBJ vertices (as the file numbers them) and the place in file units,
+// not two particle numbers. An unused first vertex makes particle and vertex numbers differ.
+TEST(MeshCloth, FabricNeedleIsRefusedNamingItsObjVertices) {
+    const auto obj = [](const char* width) {
+        return std::string("v 5 5 5\nv 0 0 0\nv ") + width + " 0 0\nv 0.0002 1 0\nv 0.0002 -1 0\nf 2 3 4\nf 3 2 5\n";
+    };
+    const auto scene = [](const char* file) {
+        return std::string(R"({"cloth": {"type": "mesh", "file": ")") + file +
+               R"("}, "material": {"fabric": "denim"}})";
+    };
+    write_file("needle.obj", obj("0.0004"));
+    const std::string needle = write_file("needle.json", scene("needle.obj"));
+    const std::string e = load_error(needle);
+    EXPECT_TRUE(has(e, needle + ": cloth.file: the edge from OBJ vertex 2 to vertex 3 (numbered from 1 as in the "
+                               "file's faces; near (0.0002, 0, 0) in the file) is the short side of a needle triangle")) << e;
+    EXPECT_TRUE(has(e, "times as stiff as the fabric (at most 1000); remesh there")) << e;
+    EXPECT_FALSE(has(e, "\n")) << e;
+    // Twenty times wider, the edge's spring is 400 times softer: the same file builds.
+    write_file("wide.obj", obj("0.008"));
+    const std::string wide = write_file("wide.json", scene("wide.obj"));
+    EXPECT_EQ(load_error(wide), "");
+}
+
 TEST(MeshCloth, ParseObjMeshDirectly) {
     // Polygons (a pentagon) are triangulated by tinyobjloader; negative (relative) indices work; materials ignored.
     const TriangleMesh m = parse_obj_mesh("mtllib none.mtl\nusemtl cloth\nv 0 0 0\nv 1 0 0\nv 1.5 1 0\nv 0.5 1.5 0\n"

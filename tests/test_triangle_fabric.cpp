@@ -307,6 +307,32 @@ TEST(TriangleFabric, LumpedMassesAddUpToDensityTimesArea) {
     EXPECT_NEAR(total, 0.2 * 0.3 * 0.2, 1e-6 * 0.012);
 }
 
+// A needle (short edge 2-3 across two wide triangles): the cook refuses it naming that edge and its k_e / k_ref (the
+// callers translate the particles into the user's terms); 40 times wider it cooks.
+TEST(TriangleFabric, NeedleIsRefusedNamingItsShortEdge) {
+    const Fabric f = test_fabric();
+    const auto needle = [](float width) {
+        // particles 0 and 1 the far corners, 2 and 3 the short edge's ends
+        return mesh_assembly({0.0f, 0.0f, 0.5f * width, -0.5f * width}, {1.0f, -1.0f, 0.0f, 0.0f}, {0, 2, 3, 3, 2, 1});
+    };
+    const GarmentAssembly a = needle(4e-4f);
+    const std::vector<float> inv(a.particle_count(), 1.0f);
+    const std::vector<Edge> edges{{2, 3, SpringKind::structural, 0.0f}};
+    const double k_ref = 0.5 * (double(f.stretch_u) + f.stretch_v);
+    const double expected = membrane_stiffness(a.x, a.y, a.z, a.triangles, edges, f, {1, 0, 0}, WeaveAlignment::aligned)[0] / k_ref;
+    ASSERT_GT(expected, membrane_stiffness_ratio_max);
+    try {
+        cook_triangle_fabric(a, inv, {f, {1, 0, 0}, WeaveAlignment::aligned});
+        ADD_FAILURE() << "a needle cooked";
+    } catch (const NeedleTriangleError& e) {
+        EXPECT_EQ(e.a, 2u);
+        EXPECT_EQ(e.b, 3u);
+        EXPECT_NEAR(e.ratio, expected, 1e-9 * expected);
+        EXPECT_NE(std::string(e.what()).find("membrane spring 2-3 would be"), std::string::npos) << e.what();
+    }
+    EXPECT_NO_THROW(cook_triangle_fabric(needle(1.6e-2f), inv, {f, {1, 0, 0}, WeaveAlignment::aligned}));
+}
+
 TEST(TriangleFabric, CookedClothHasPerSpringMaterialsAndNoBendSprings) {
     GarmentAssembly a = rectangle(0.1, 0.1, 0.02);
     const std::size_t panel = a.particle_count();

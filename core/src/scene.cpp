@@ -1449,42 +1449,11 @@ void apply_state(const SceneState& st, BuiltScene& out) {
 namespace {
 
 /// Fabric model: an outline narrower than its spacing somewhere (a spike a fraction of the spacing wide) is
-/// triangulated there into needles, whose short edge's membrane spring is far stiffer than the fabric (k = E A /
-/// l^2); past the cook's limit (1000 x the fabric's mean stretch stiffness) the file is refused here, naming the
-/// place in the outline's coordinates (cu, cv: the outline's centre) rather than two particle numbers.
-void check_outline_needles(const SceneSpec& s, const GarmentAssembly& a, float cu, float cv) {
-    const double k_ref = 0.5 * (double(s.fabric.stretch_u) + s.fabric.stretch_v);
-    // First a bound, O(triangles): an edge's k is at most sum over its (at most 2 here) triangles of
-    // max(stretch_u, stretch_v) A / l^2. Only a mesh that may pass the limit pays for the exact stiffnesses.
-    const double e_max = std::max(double(s.fabric.stretch_u), double(s.fabric.stretch_v));
-    double worst_ratio = 0.0; // max A / l^2
-    for (std::size_t t = 0; t + 2 < a.triangles.size(); t += 3) {
-        const std::uint32_t v[3] = {a.triangles[t], a.triangles[t + 1], a.triangles[t + 2]};
-        const auto d = [&](int i, int j, int k) {
-            return k == 0 ? double(a.x[v[j]]) - a.x[v[i]] : k == 1 ? double(a.y[v[j]]) - a.y[v[i]]
-                                                                   : double(a.z[v[j]]) - a.z[v[i]];
-        };
-        const double ux = d(0, 1, 0), uy = d(0, 1, 1), uz = d(0, 1, 2), wx = d(0, 2, 0), wy = d(0, 2, 1),
-                     wz = d(0, 2, 2);
-        const double cx = uy * wz - uz * wy, cy = uz * wx - ux * wz, cz = ux * wy - uy * wx;
-        const double area = 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
-        for (int e = 0; e < 3; ++e) {
-            const double ex = d(e, (e + 1) % 3, 0), ey = d(e, (e + 1) % 3, 1), ez = d(e, (e + 1) % 3, 2);
-            const double l2 = ex * ex + ey * ey + ez * ez;
-            if (l2 > 0.0) worst_ratio = std::max(worst_ratio, area / l2);
-        }
-    }
-    if (!(2.0 * worst_ratio * e_max > 1e3 * k_ref)) return;
-    std::vector<Edge> edges;
-    for (const Edge& e : a.edges)
-        if (e.kind == SpringKind::structural || e.kind == SpringKind::shear) edges.push_back(e);
-    const std::vector<double> k = membrane_stiffness(a.x, a.y, a.z, a.triangles, edges, s.fabric, {1.0f, 0.0f, 0.0f},
-                                                     WeaveAlignment::aligned);
-    std::size_t worst = 0;
-    for (std::size_t e = 1; e < k.size(); ++e)
-        if (k[e] > k[worst]) worst = e;
-    if (k.empty() || !(k[worst] > 1e3 * k_ref)) return;
-    const Edge& e = edges[worst];
+/// triangulated there into needles, which the cook refuses (NeedleTriangleError: a membrane spring past
+/// membrane_stiffness_ratio_max); this names the place in the outline's coordinates (cu, cv: the outline's centre)
+/// rather than two particle numbers.
+[[noreturn]] void refuse_outline_needle(const SceneSpec& s, const GarmentAssembly& a, float cu, float cv,
+                                        const NeedleTriangleError& e) {
     const bool horizontal = s.outline.plane == GridPlane::horizontal;
     const double u = 0.5 * (double(a.x[e.a]) + a.x[e.b]) + cu,
                  v = (horizontal ? 0.5 * (double(a.z[e.a]) + a.z[e.b]) : -0.5 * (double(a.y[e.a]) + a.y[e.b])) + cv;
@@ -1492,8 +1461,26 @@ void check_outline_needles(const SceneSpec& s, const GarmentAssembly& a, float c
     std::snprintf(msg, sizeof msg,
                   ": cloth.outline at cloth.spacing = %g m: near (%.4g, %.4g) the outline is narrower than the spacing "
                   "(a spike or a slit): its triangles there are needles whose short edge would be %.0f times as stiff "
-                  "as the fabric (at most 1000); widen the outline there, or lower cloth.spacing",
-                  double(s.outline.spacing), u, v, k[worst] / k_ref);
+                  "as the fabric (at most %.0f); widen the outline there, or lower cloth.spacing",
+                  double(s.outline.spacing), u, v, e.ratio, membrane_stiffness_ratio_max);
+    throw InvalidInput((s.source.empty() ? std::string("scene") : s.source) + msg);
+}
+
+/// The same for an OBJ mesh (fabric model): names the needle's short edge by its OBJ vertices (1-based, as the file
+/// numbers them; the first of any welded duplicates) and its middle in the file's units.
+[[noreturn]] void refuse_mesh_needle(const SceneSpec& s, const TriangleMesh& mesh, const NeedleTriangleError& e) {
+    const auto obj_vertex = [&](std::uint32_t particle) {
+        const auto& pv = mesh.particle_of_vertex;
+        return std::size_t(std::find(pv.begin(), pv.end(), std::int64_t(particle)) - pv.begin()) + 1;
+    };
+    char msg[500];
+    std::snprintf(msg, sizeof msg,
+                  ": cloth.file: the edge from OBJ vertex %zu to vertex %zu (numbered from 1 as in the file's faces; near "
+                  "(%.4g, %.4g, %.4g) in the file) is "
+                  "the short side of a needle triangle: its membrane spring would be %.0f times as stiff as the fabric "
+                  "(at most %.0f); remesh there (collapse the short edge or split the wide triangle)",
+                  obj_vertex(e.a), obj_vertex(e.b), 0.5 * (mesh.x[e.a] + mesh.x[e.b]), 0.5 * (mesh.y[e.a] + mesh.y[e.b]),
+                  0.5 * (mesh.z[e.a] + mesh.z[e.b]), e.ratio, membrane_stiffness_ratio_max);
     throw InvalidInput((s.source.empty() ? std::string("scene") : s.source) + msg);
 }
 
@@ -1547,8 +1534,11 @@ void build_outline_cloth(const SceneSpec& s, BuiltScene& out) {
         for (std::size_t i = 0; i < a.particle_count(); ++i)
             if ((vertical ? a.y[i] : a.z[i]) >= top - 0.25f * o.spacing) inv_mass[i] = 0.0f;
     }
-    if (s.model == MaterialModel::fabric) check_outline_needles(s, a, cu, cv);
-    cook_assembly(s, a, inv_mass, free_inv_mass, out);
+    try {
+        cook_assembly(s, a, inv_mass, free_inv_mass, out);
+    } catch (const NeedleTriangleError& e) {
+        refuse_outline_needle(s, a, cu, cv, e);
+    }
     out.cloth.origin = {double(o.centre[0]), double(o.centre[1]), double(o.centre[2])};
 }
 
@@ -1655,7 +1645,11 @@ BuiltScene build_scene_body(const SceneSpec& s) {
         }
         for (std::uint32_t v : m.pin_vertices) inv_mass[static_cast<std::size_t>(m.mesh->particle_of_vertex.at(v))] = 0.0f;
         // An OBJ's edges need not follow any weave: the unaligned membrane (triangle_fabric.hpp); u = the file's x.
-        cook_assembly(s, a, inv_mass, free_inv_mass, out, {1.0f, 0.0f, 0.0f}, WeaveAlignment::unaligned);
+        try {
+            cook_assembly(s, a, inv_mass, free_inv_mass, out, {1.0f, 0.0f, 0.0f}, WeaveAlignment::unaligned);
+        } catch (const NeedleTriangleError& e) { // the assembly's particles are the mesh's, in order
+            refuse_mesh_needle(s, *m.mesh, e);
+        }
         out.cloth.origin = {double(m.centre[0]), double(m.centre[1]), double(m.centre[2])};
     } else if (s.model == MaterialModel::fabric) {
         // Fabric: node masses from the fabric's density and the panels' triangles (TShirtParams::total_mass is not

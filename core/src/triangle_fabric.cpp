@@ -22,6 +22,15 @@ std::array<double, 3> unit_axis(const std::array<float, 3>& axis) {
     return {axis[0] / l, axis[1] / l, axis[2] / l};
 }
 
+/// Area of the triangle (a, b, c), in double.
+double triangle_area(std::span<const float> x, std::span<const float> y, std::span<const float> z, std::uint32_t a,
+                     std::uint32_t b, std::uint32_t c) {
+    const double ux = double(x[b]) - x[a], uy = double(y[b]) - y[a], uz = double(z[b]) - z[a];
+    const double vx = double(x[c]) - x[a], vy = double(y[c]) - y[a], vz = double(z[c]) - z[a];
+    const double cx = uy * vz - uz * vy, cy = uz * vx - ux * vz, cz = ux * vy - uy * vx;
+    return 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
+}
+
 /// Index of spring (a, b) in `edges` sorted by (a, b) with a < b, or npos.
 std::size_t find_edge(std::span<const Edge> edges, std::uint32_t a, std::uint32_t b) {
     if (a > b) std::swap(a, b);
@@ -43,6 +52,13 @@ double edge_modulus(const Fabric& f, double cos2, WeaveAlignment alignment) {
     const double g = std::max(double(f.shear), 1e-3 * std::min(eu, ev));
     return 1.0 / (cos2 * cos2 / eu + sin2 * sin2 / ev + cos2 * sin2 / g);
 }
+
+NeedleTriangleError::NeedleTriangleError(std::uint32_t a_, std::uint32_t b_, double ratio_)
+    : InvalidInput("membrane spring " + std::to_string(a_) + "-" + std::to_string(b_) + " would be " +
+                   std::to_string(static_cast<long long>(std::lround(ratio_))) +
+                   " times as stiff as the fabric (at most 1000): a needle triangle (a short edge across a wide "
+                   "triangle); remesh there"),
+      a(a_), b(b_), ratio(ratio_) {}
 
 std::vector<double> membrane_stiffness(std::span<const float> x, std::span<const float> y,
                                        std::span<const float> z, std::span<const std::uint32_t> triangles,
@@ -75,12 +91,7 @@ std::vector<double> membrane_stiffness(std::span<const float> x, std::span<const
     std::vector<char> in_triangle(edges.size(), 0);
     for (std::size_t t = 0; t + 2 < triangles.size(); t += 3) {
         const std::uint32_t v[3] = {triangles[t], triangles[t + 1], triangles[t + 2]};
-        const double ux = double(x[v[1]]) - x[v[0]], uy = double(y[v[1]]) - y[v[0]],
-                     uz = double(z[v[1]]) - z[v[0]];
-        const double wx = double(x[v[2]]) - x[v[0]], wy = double(y[v[2]]) - y[v[0]],
-                     wz = double(z[v[2]]) - z[v[0]];
-        const double cx = uy * wz - uz * wy, cy = uz * wx - ux * wz, cz = ux * wy - uy * wx;
-        const double area = 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
+        const double area = triangle_area(x, y, z, v[0], v[1], v[2]);
         for (int s = 0; s < 3; ++s) {
             const std::uint32_t a = v[s], b = v[(s + 1) % 3];
             const std::size_t e = slot(a, b);
@@ -105,10 +116,7 @@ std::vector<double> lumped_masses(std::span<const float> x, std::span<const floa
     std::vector<double> m(x.size(), 0.0);
     for (std::size_t t = 0; t + 2 < triangles.size(); t += 3) {
         const std::uint32_t a = triangles[t], b = triangles[t + 1], c = triangles[t + 2];
-        const double ux = double(x[b]) - x[a], uy = double(y[b]) - y[a], uz = double(z[b]) - z[a];
-        const double vx = double(x[c]) - x[a], vy = double(y[c]) - y[a], vz = double(z[c]) - z[a];
-        const double cx = uy * vz - uz * vy, cy = uz * vx - ux * vz, cz = ux * vy - uy * vx;
-        const double third = density * 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz) / 3.0;
+        const double third = density * triangle_area(x, y, z, a, b, c) / 3.0;
         m[a] += third, m[b] += third, m[c] += third;
     }
     return m;
@@ -162,6 +170,11 @@ Cloth cook_triangle_fabric(const GarmentAssembly& a, std::span<const float> inv_
     const double k_ref = 0.5 * (double(f.stretch_u) + f.stretch_v);
     const std::vector<double> k =
         membrane_stiffness(a.x, a.y, a.z, a.triangles, edges, f, o.axis_u, o.alignment);
+    std::size_t stiffest = std::size_t(-1);
+    for (std::size_t e = 0; e < edges.size(); ++e)
+        if (edges[e].kind != SpringKind::seam && (stiffest == std::size_t(-1) || k[e] > k[stiffest])) stiffest = e;
+    if (stiffest != std::size_t(-1) && !(k[stiffest] <= membrane_stiffness_ratio_max * k_ref))
+        throw NeedleTriangleError(edges[stiffest].a, edges[stiffest].b, k[stiffest] / k_ref);
     for (std::size_t e = 0; e < edges.size(); ++e)
         edges[e].scale = edges[e].kind == SpringKind::seam ? 1.0f : float(k[e] / k_ref);
     std::array<SpringMaterial, spring_kind_count> material{};

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "drape/cloth.hpp"
+#include "drape/errors.hpp"
 #include "drape/fabric.hpp"
 #include "drape/panels.hpp"
 
@@ -66,6 +67,21 @@ std::vector<double> lumped_masses(std::span<const float> x, std::span<const floa
                                   std::span<const float> z, std::span<const std::uint32_t> triangles,
                                   double density);
 
+/// The most a membrane spring may be stiffer than the fabric, k_e / k_ref (k_ref = (stretch_u + stretch_v) / 2; the
+/// cook's limit on Edge::scale): past it an edge is the short side of a needle triangle (k = E A / l^2 grows as the
+/// edge shortens across a wide triangle), whose spring would need a time step sqrt(1000) ~ 30 times smaller.
+inline constexpr double membrane_stiffness_ratio_max = 1e3;
+
+/// cook_triangle_fabric's refusal of a needle: the stiffest membrane edge, particles (a, b) of the assembly (a < b),
+/// and its k_e / k_ref. what() names the two particles; a caller that knows where they came from (an outline, an
+/// OBJ file) catches it and names the place in the user's terms.
+class NeedleTriangleError : public InvalidInput {
+  public:
+    NeedleTriangleError(std::uint32_t a, std::uint32_t b, double ratio);
+    std::uint32_t a, b;
+    double ratio;
+};
+
 struct TriangleFabricOptions {
     Fabric fabric;
     std::array<float, 3> axis_u{1.0f, 0.0f, 0.0f}; ///< the weave's u direction in the assembly's frame
@@ -78,7 +94,8 @@ struct TriangleFabricOptions {
 /// assembly's seam springs (seam stiffness above), no other springs of the assembly (its structural springs
 /// in no triangle excepted: kept, k = E_e); per-spring stiffness as Edge::scale (above); Cloth::triangles;
 /// hinge bending (set_bending, damping Fabric::damping). Rest lengths: the assembly's. Masses are the
-/// caller's (inv_mass, 1/kg, 0 = pinned). Throws InvalidInput.
+/// caller's (inv_mass, 1/kg, 0 = pinned). Throws NeedleTriangleError where a membrane edge's k_e / k_ref passes
+/// membrane_stiffness_ratio_max, InvalidInput for any other bad input.
 Cloth cook_triangle_fabric(const GarmentAssembly& assembly, std::span<const float> inv_mass,
                            const TriangleFabricOptions& options);
 
