@@ -34,12 +34,73 @@ struct CusickResult {
     TopView view;
 };
 
+/// How a specimen falls and settles: air drag (1/s), the settling time limit (s), and whether to print its energies.
+struct Drop {
+    double drag = 2.0, max_time = 6.0;
+    bool energies = false;
+    /// Clamped between two discs as the standard's tester holds it: every particle within the disc's radius of its
+    /// axis pinned where it starts (3 mm above the disc); otherwise the specimen rests on the disc by friction.
+    bool clamp = false;
+};
+
+/// --energies: the settled specimen's energies, one line: the hinge bending energy split into its part along each
+/// hinge's current normal (bending) and the rest (in-plane: the quadratic model's stencil also sees non-affine in-plane
+/// motion), the membrane springs' energy by direction (along u or v; diagonals and cut edges) and sign of the strain,
+/// and m g y over the free particles (g = 9.81 m/s^2, y in the cloth's frame: from its flat start, 3 mm above the disc).
+void print_energies(const Simulation& sim) {
+    const std::span<const float> X = sim.x(), Y = sim.y(), Z = sim.z();
+    const Cloth& c = sim.cloth();
+    double normal = 0.0, in_plane = 0.0;
+    for (const BendElement& e : c.bending.elements) {
+        double q[3] = {0.0, 0.0, 0.0}, p[4][3];
+        for (int k = 0; k < 4; ++k) {
+            p[k][0] = X[e.v[k]], p[k][1] = Y[e.v[k]], p[k][2] = Z[e.v[k]];
+            for (int d = 0; d < 3; ++d) q[d] += double(e.c[k]) * p[k][d];
+        }
+        const auto cross = [](const double* a, const double* b, double* o) {
+            o[0] = a[1] * b[2] - a[2] * b[1], o[1] = a[2] * b[0] - a[0] * b[2], o[2] = a[0] * b[1] - a[1] * b[0];
+        };
+        double e0[3], e1[3], e2[3], n0[3], n1[3], n[3];
+        for (int d = 0; d < 3; ++d) e0[d] = p[1][d] - p[0][d], e1[d] = p[2][d] - p[0][d], e2[d] = p[3][d] - p[0][d];
+        cross(e0, e1, n0);
+        cross(e0, e2, n1); // the opposite vertices lie on opposite sides: n1 points against n0 when flat
+        const double l0 = std::sqrt(n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]),
+                     l1 = std::sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]);
+        for (int d = 0; d < 3; ++d) n[d] = n0[d] / l0 - n1[d] / l1;
+        const double ln = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        const double qq = q[0] * q[0] + q[1] * q[1] + q[2] * q[2];
+        const double qn = ln > 0.0 ? (q[0] * n[0] + q[1] * n[1] + q[2] * n[2]) / ln : 0.0;
+        normal += 0.5 * e.weight * qn * qn;
+        in_plane += 0.5 * e.weight * (qq - qn * qn);
+    }
+    double membrane[2][2] = {{0.0, 0.0}, {0.0, 0.0}}; // [along u or v, other][tension, compression]
+    for (const Edge& e : c.edges) {
+        if (e.kind != SpringKind::structural && e.kind != SpringKind::shear) continue;
+        const double dx = X[e.b] - X[e.a], dy = Y[e.b] - Y[e.a], dz = Z[e.b] - Z[e.a];
+        const double stretch = std::sqrt(dx * dx + dy * dy + dz * dz) - e.rest;
+        const double k = double(c.material[static_cast<std::size_t>(e.kind)].stiffness) * e.scale;
+        membrane[e.kind == SpringKind::shear ? 1 : 0][stretch < 0.0 ? 1 : 0] += 0.5 * k * stretch * stretch;
+    }
+    double gravity = 0.0;
+    for (std::size_t i = 0; i < X.size(); ++i) {
+        const float inv = c.free_inv_mass.empty() ? c.inv_mass[i] : c.free_inv_mass[i];
+        if (inv > 0.0f) gravity += 9.81 * Y[i] / inv;
+    }
+    std::printf("  energies (J): bending %.4g, of it in-plane %.2g; membrane along u/v %.3g tension %.3g compression, "
+                "other edges %.3g tension %.3g compression; m g y %.5g\n",
+                normal + in_plane, in_plane, membrane[0][0], membrane[0][1], membrane[1][0], membrane[1][1], gravity);
+}
+
 /// Settles a built specimen on the disc and measures it. `sp` holds the colliders in the cloth's frame and dt.
-void settle_and_measure(Cloth cloth, const InitialState& initial, const SimulationParams& sp, double max_time,
+void settle_and_measure(Cloth cloth, const InitialState& initial, const SimulationParams& sp, const Drop& drop,
                         CusickResult& r) {
     r.particles = cloth.particle_count;
     std::vector<std::uint32_t> triangles = cloth.triangles;
     const std::array<double, 3> origin = cloth.origin;
+    if (drop.clamp)
+        for (std::size_t i = 0; i < cloth.particle_count; ++i)
+            if (std::hypot(double(initial.x[i]) + origin[0], double(initial.z[i]) + origin[2]) <= disc_radius)
+                cloth.inv_mass[i] = 0.0f;
     Simulation sim(std::move(cloth), initial, sp);
     // Settled: the fastest particle slower than 1 mm/s, or the cloth's mean height still to 0.1 um per 20 ms.
     const auto mean_height = [](const Simulation& s) {
@@ -47,7 +108,8 @@ void settle_and_measure(Cloth cloth, const InitialState& initial, const Simulati
         for (float v : s.y()) y += v;
         return y / double(s.y().size());
     };
-    r.settle = settle(sim, max_time, 1e-3, 0.02, 5, mean_height, 1e-7);
+    r.settle = settle(sim, drop.max_time, 1e-3, 0.02, 5, mean_height, 1e-7);
+    if (drop.energies) print_energies(sim);
     // The raster is centred on the disc axis: positions back into the world frame (x, z only; y is shading).
     std::vector<float> x(sim.x().begin(), sim.x().end()), z(sim.z().begin(), sim.z().end());
     for (float& v : x) v = static_cast<float>(double(v) + origin[0]);
@@ -68,7 +130,7 @@ std::vector<Collider> cusick_colliders(const ColliderSurface& surface) {
 }
 
 /// The square specimen (side 30 cm, a grid cloth), centred on the disc.
-CusickResult run_cusick_square(const Fabric& fabric, double spacing, double drag, double max_time) {
+CusickResult run_cusick_square(const Fabric& fabric, double spacing, const Drop& drop) {
     CusickResult r;
     HangParams hp;
     hp.model = MaterialModel::fabric;
@@ -83,11 +145,11 @@ CusickResult run_cusick_square(const Fabric& fabric, double spacing, double drag
     SceneBuild scene = build_hang_scene(hp);
     r.specimen_area = specimen_side * specimen_side;
     SimulationParams sp;
-    sp.air_drag = static_cast<float>(drag);
+    sp.air_drag = static_cast<float>(drop.drag);
     const std::array<double, 3> back{-double(hp.centre[0]), -double(hp.centre[1]), -double(hp.centre[2])};
     for (const Collider& c : cusick_colliders(surface)) sp.colliders.push_back(translated(c, back));
     sp.dt = static_cast<float>(default_dt(scene.cloth, sp));
-    settle_and_measure(std::move(scene.cloth), scene.initial, sp, max_time, r);
+    settle_and_measure(std::move(scene.cloth), scene.initial, sp, drop, r);
     return r;
 }
 
@@ -114,7 +176,7 @@ std::uint32_t circle_vertices(double spacing) {
 /// 30 cm square as an outline (4 vertices): the square grid specimen's shape with the circle's mesh model.
 /// `phase` in [0, 1) turns the circle's polygon by that fraction of the angle between its vertices (the same circle,
 /// another mesh of it: the u-v fill lattice and the outline samples fall differently); 0 for the square.
-CusickResult run_cusick_outline(const Fabric& fabric, double spacing, double drag, double max_time, bool square,
+CusickResult run_cusick_outline(const Fabric& fabric, double spacing, const Drop& drop, bool square,
                                 double phase) {
     CusickResult r;
     SceneSpec spec = cusick_spec(ClothType::outline, fabric);
@@ -132,13 +194,13 @@ CusickResult run_cusick_outline(const Fabric& fabric, double spacing, double dra
     o.plane = GridPlane::horizontal;
     const ColliderSurface surface{0.001f, 0.6f};
     o.centre = {0.0f, surface.thickness + float(drop_height), 0.0f};
-    spec.physics.air_drag = static_cast<float>(drag);
+    spec.physics.air_drag = static_cast<float>(drop.drag);
     spec.physics.colliders = cusick_colliders(surface);
     BuiltScene scene = build_scene(spec); // colliders into the cloth's frame, dt = 0.9 x the stability bound
     r.n = nv;
     r.specimen_area = square ? specimen_side * specimen_side
                              : 0.5 * double(nv) * specimen_radius * specimen_radius * std::sin(2.0 * pi / double(nv));
-    settle_and_measure(std::move(scene.cloth), scene.initial, scene.params, max_time, r);
+    settle_and_measure(std::move(scene.cloth), scene.initial, scene.params, drop, r);
     return r;
 }
 
@@ -148,7 +210,7 @@ CusickResult run_cusick_outline(const Fabric& fabric, double spacing, double dra
 /// outline cloth's band of cut triangles; its specimen area is its triangles' (within O(h) of pi r^2). `phase` in
 /// [0, 1) moves the circle's centre off the cell lattice by (phase, frac(3 phase)) cells (another mesh of the same
 /// circle; the specimen stays centred on the disc).
-CusickResult run_cusick_mask_circle(const Fabric& fabric, double spacing, double drag, double max_time, double phase) {
+CusickResult run_cusick_mask_circle(const Fabric& fabric, double spacing, const Drop& drop, double phase) {
     CusickResult r;
     SceneSpec spec = cusick_spec(ClothType::mask, fabric);
     const auto cells = static_cast<std::uint32_t>(std::floor(2.0 * specimen_radius / spacing)) + 2;
@@ -170,7 +232,7 @@ CusickResult run_cusick_mask_circle(const Fabric& fabric, double spacing, double
     panel.axis_v = {0.0f, 0.0f, -1.0f};
     panel.origin = {-mid_u * spacing, double(surface.thickness) + drop_height, mid_v * spacing};
     spec.masks.panels.push_back(panel);
-    spec.physics.air_drag = static_cast<float>(drag);
+    spec.physics.air_drag = static_cast<float>(drop.drag);
     spec.physics.colliders = cusick_colliders(surface);
     BuiltScene scene = build_scene(spec);
     r.n = cells;
@@ -178,7 +240,7 @@ CusickResult run_cusick_mask_circle(const Fabric& fabric, double spacing, double
     r.specimen_area = 0.0;
     for (double a : lumped_masses(scene.initial.x, scene.initial.y, scene.initial.z, scene.cloth.triangles, 1.0))
         r.specimen_area += a;
-    settle_and_measure(std::move(scene.cloth), scene.initial, scene.params, max_time, r);
+    settle_and_measure(std::move(scene.cloth), scene.initial, scene.params, drop, r);
     return r;
 }
 
@@ -191,7 +253,7 @@ int cmd_cusick(const Options& opt) {
     std::vector<double> spacings = opt.quick ? std::vector<double>{0.02, 0.01} : std::vector<double>{0.02, 0.01, 0.005};
     if (opt.fine) spacings.push_back(0.0025);
     if (!opt.spacings.empty()) spacings = opt.spacings;
-    const double drag = opt.drag > 0.0 ? opt.drag : 2.0, max_time = opt.max_time > 0.0 ? opt.max_time : 6.0;
+    const Drop drop{opt.drag > 0.0 ? opt.drag : 2.0, opt.max_time > 0.0 ? opt.max_time : 6.0, opt.energies, opt.clamp};
     const bool square = opt.square;
     if (square)
         std::printf("Cusick drape test: square specimen %.0f cm (grid cloth, N x N particles)", specimen_side * 100.0);
@@ -207,8 +269,14 @@ int cmd_cusick(const Options& opt) {
     std::printf(", disc radius %.0f mm (collision margin 1 mm, friction 0.6), dropped from %.0f mm above, air drag "
                 "%.1f 1/s, settled (max speed < 1 mm/s, or the mean height still to 0.1 um per 20 ms, at 5 checks in "
                 "a row; else %.0f s); shadow rasterised at 0.5 mm; DC = (shadow - disc) / (specimen - disc)\n\n",
-                disc_radius * 1e3, (drop_height + 0.001) * 1e3, drag, max_time);
+                disc_radius * 1e3, (drop_height + 0.001) * 1e3, drop.drag, drop.max_time);
     if (opt.shear > 0.0) std::printf("Every fabric's shear stiffness replaced by %g N/m (--shear)\n\n", opt.shear);
+    if (opt.stretch_scale != 1.0)
+        std::printf("Every fabric's stretch stiffness (u and v) times %g (--stretch-scale)\n\n", opt.stretch_scale);
+    if (drop.clamp)
+        std::printf("Clamped between discs (--clamp): the particles within %.0f mm of the axis pinned where they start\n\n",
+                    disc_radius * 1e3);
+    for (const auto& [key, value] : opt.set) std::printf("Every fabric's %s set to %g (--set)\n\n", key.c_str(), value);
     const int samples = opt.samples; // [1, 64], checked by main
     if (samples > 1)
         std::printf("%d meshes of each specimen (sample k: %s k / %d); the summary gives their mean DC and its "
@@ -231,13 +299,26 @@ int cmd_cusick(const Options& opt) {
         for (double h : spacings) {
             Fabric fabric = textile_fabric(name);
             if (opt.shear > 0.0) fabric.shear = static_cast<float>(opt.shear);
+            fabric.stretch_u = static_cast<float>(fabric.stretch_u * opt.stretch_scale);
+            fabric.stretch_v = static_cast<float>(fabric.stretch_v * opt.stretch_scale);
+            for (const auto& [key, value] : opt.set) {
+                float* field = key == "density"     ? &fabric.density
+                               : key == "stretch_u" ? &fabric.stretch_u
+                               : key == "stretch_v" ? &fabric.stretch_v
+                               : key == "shear"     ? &fabric.shear
+                               : key == "bend_u"    ? &fabric.bend_u
+                               : key == "bend_v"    ? &fabric.bend_v
+                                                    : &fabric.damping;
+                *field = static_cast<float>(value);
+            }
+            validate_fabric(fabric, "drape_textile cusick --set");
             Summary sum{name, h, {}, ""};
             for (int k = 0; k < samples; ++k) {
                 const double phase = double(k) / double(samples);
                 const CusickResult r =
-                    square            ? run_cusick_square(fabric, h, drag, max_time)
-                    : opt.mask_circle ? run_cusick_mask_circle(fabric, h, drag, max_time, phase)
-                                      : run_cusick_outline(fabric, h, drag, max_time, opt.square_outline, phase);
+                    square            ? run_cusick_square(fabric, h, drop)
+                    : opt.mask_circle ? run_cusick_mask_circle(fabric, h, drop, phase)
+                                      : run_cusick_outline(fabric, h, drop, opt.square_outline, phase);
                 char sample[32] = "";
                 if (samples > 1) std::snprintf(sample, sizeof sample, " %d |", k);
                 std::printf("| %s | %.1f |%s %zu | %.3f | %d | %.1f | %.1f | %.2f%s | %zu | %.1f |\n", name.c_str(),

@@ -16,7 +16,12 @@
 // replaces each fabric's in-plane shear stiffness by G N/m (G = stretch / 2 makes a woven's edge modulus the same in
 // every direction: a diagnostic of the weave-aligned edge springs); --samples K (cusick, circle) K meshes of each
 // specimen (the circle turned, or moved off the cell lattice, by k / K of a step), with the mean DC and its spread;
-// --drag D (cusick) the air drag while the specimen falls and settles, 1/s (default 2; higher lowers it more slowly).
+// --set FIELD=VALUE (cusick, repeatable) sets one Fabric field of every fabric, in the struct's units (a diagnostic:
+// density kg/m^2, stretch_u, stretch_v, shear N/m, bend_u, bend_v N*m, damping s; checked by the fabric's own ranges);
+// --clamp (cusick) clamps the specimen between discs as the standard's tester does (the particles within the disc's
+// radius pinned where they start) instead of resting it on the disc; --energies (cusick) prints each settled specimen's energies (bending, with its in-plane part; membrane by
+// direction and sign of strain; m g y); --stretch-scale F (cusick) multiplies each fabric's stretch stiffness (u and v) by F (a diagnostic: it moves the
+// fabric's stretching-bending length (B / E)^(1/2) and nothing else); --drag D (cusick) the air drag while the specimen falls and settles, 1/s (default 2; higher lowers it more slowly).
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
@@ -24,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "drape/errors.hpp"
 #include "drape/workers.hpp"
 #include "elastica.hpp"
 #include "harness.hpp"
@@ -72,6 +78,8 @@ int main(int argc, char** argv) {
         else if (s == "--square") opt.square = true;
         else if (s == "--square-outline") opt.square_outline = true;
         else if (s == "--mask-circle") opt.mask_circle = true;
+        else if (s == "--energies") opt.energies = true;
+        else if (s == "--clamp") opt.clamp = true;
         else if (s == "--max-time" && a + 1 < argc) {
             opt.max_time = std::atof(argv[++a]);
             if (!(opt.max_time > 0.0 && opt.max_time <= 600.0)) {
@@ -92,6 +100,28 @@ int main(int argc, char** argv) {
                 std::fprintf(stderr, "drape_textile: --shear must be in [0.01, 1e6] N/m\n");
                 return 2;
             }
+        }
+        else if (s == "--stretch-scale" && a + 1 < argc) {
+            opt.stretch_scale = std::atof(argv[++a]);
+            if (!(opt.stretch_scale >= 1e-3 && opt.stretch_scale <= 1e3)) {
+                std::fprintf(stderr, "drape_textile: --stretch-scale must be in [0.001, 1000]\n");
+                return 2;
+            }
+        }
+        else if (s == "--set" && a + 1 < argc) {
+            const std::string kv = argv[++a];
+            const std::size_t eq = kv.find('=');
+            const std::string key = kv.substr(0, eq);
+            const double value = eq == std::string::npos ? -1.0 : std::atof(kv.c_str() + eq + 1);
+            static const char* keys[] = {"density", "stretch_u", "stretch_v", "shear", "bend_u", "bend_v", "damping"};
+            bool known = false;
+            for (const char* k : keys) known = known || key == k;
+            if (!known || !(value >= 0.0 && value <= 1e6)) {
+                std::fprintf(stderr, "drape_textile: --set needs FIELD=VALUE, FIELD one of density (kg/m^2), stretch_u, "
+                                     "stretch_v, shear (N/m), bend_u, bend_v (N*m), damping (s); VALUE in [0, 1e6]\n");
+                return 2;
+            }
+            opt.set.emplace_back(key, value);
         }
         else if (s == "--drag" && a + 1 < argc) {
             opt.drag = std::atof(argv[++a]);
@@ -121,11 +151,16 @@ int main(int argc, char** argv) {
     if (cmd == "elastica") return cmd_elastica();
     Workers workers(opt.threads);
     return workers.run([&]() -> int {
-        if (cmd == "cantilever") return cmd_cantilever(opt);
-        if (cmd == "tension") return cmd_tension(opt);
-        if (cmd == "cusick") return cmd_cusick(opt);
-        if (cmd == "hang") return cmd_hang(opt);
-        if (cmd == "verlet") return cmd_verlet(opt);
+        try {
+            if (cmd == "cantilever") return cmd_cantilever(opt);
+            if (cmd == "tension") return cmd_tension(opt);
+            if (cmd == "cusick") return cmd_cusick(opt);
+            if (cmd == "hang") return cmd_hang(opt);
+            if (cmd == "verlet") return cmd_verlet(opt);
+        } catch (const InvalidInput& e) { // a fabric made invalid by --set or --shear
+            std::fprintf(stderr, "drape_textile: %s\n", e.what());
+            return 2;
+        }
         std::fprintf(stderr, "drape_textile: unknown command %s\n", cmd.c_str());
         return 2;
     });

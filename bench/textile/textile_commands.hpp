@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace drape::textile {
@@ -22,6 +23,10 @@ struct Options {
     std::vector<std::string> fabrics;
     int samples = 1;    ///< cusick: meshes of each specimen (other lattice phases of the same circle), mean DC reported
     double shear = 0.0; ///< cusick: > 0 replaces each preset's in-plane shear stiffness, N/m (a diagnostic)
+    std::vector<std::pair<std::string, double>> set; ///< cusick: Fabric fields replaced (--set FIELD=VALUE)
+    bool energies = false; ///< cusick: print each settled specimen's energies (bending, membrane, gravity)
+    bool clamp = false;    ///< cusick: the specimen clamped between discs (pinned within the disc's radius)
+    double stretch_scale = 1.0; ///< cusick: multiplies each preset's stretch_u and stretch_v (a diagnostic)
     double drag = 0.0;  ///< cusick: air drag while the specimen falls and settles, 1/s (0: the default, 2 1/s)
 };
 
