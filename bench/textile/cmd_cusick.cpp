@@ -43,14 +43,19 @@ struct Drop {
     bool clamp = false;
 };
 
-/// --energies: the settled specimen's energies, one line: the hinge bending energy split into its part along each
-/// hinge's current normal (bending) and the rest (in-plane: the quadratic model's stencil also sees non-affine in-plane
-/// motion), the membrane springs' energy by direction (along u or v; diagonals and cut edges) and sign of the strain,
-/// and m g y over the free particles (g = 9.81 m/s^2, y in the cloth's frame: from its flat start, 3 mm above the disc).
-void print_energies(const Simulation& sim) {
-    const std::span<const float> X = sim.x(), Y = sim.y(), Z = sim.z();
-    const Cloth& c = sim.cloth();
-    double normal = 0.0, in_plane = 0.0;
+/// A specimen's energies in one configuration (J): the hinge bending energy and the part of it not along each
+/// hinge's current normal (the quadratic model's q_e also sees non-affine in-plane motion); the membrane springs'
+/// energy along u or v and on the other edges (diagonals, cut edges), each split by the sign of the strain; m g y
+/// over the free particles (g = 9.81 m/s^2, y in the cloth's frame).
+struct Energies {
+    double bending = 0.0, in_plane = 0.0;
+    double membrane[2][2] = {{0.0, 0.0}, {0.0, 0.0}}; ///< [along u or v, other edges][tension, compression]
+    double gravity = 0.0;
+    double membrane_total() const { return membrane[0][0] + membrane[0][1] + membrane[1][0] + membrane[1][1]; }
+};
+
+Energies energies_of(const Cloth& c, std::span<const float> X, std::span<const float> Y, std::span<const float> Z) {
+    Energies out;
     for (const BendElement& e : c.bending.elements) {
         double q[3] = {0.0, 0.0, 0.0}, p[4][3];
         for (int k = 0; k < 4; ++k) {
@@ -70,25 +75,63 @@ void print_energies(const Simulation& sim) {
         const double ln = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         const double qq = q[0] * q[0] + q[1] * q[1] + q[2] * q[2];
         const double qn = ln > 0.0 ? (q[0] * n[0] + q[1] * n[1] + q[2] * n[2]) / ln : 0.0;
-        normal += 0.5 * e.weight * qn * qn;
-        in_plane += 0.5 * e.weight * (qq - qn * qn);
+        out.bending += 0.5 * e.weight * qq;
+        out.in_plane += 0.5 * e.weight * (qq - qn * qn);
     }
-    double membrane[2][2] = {{0.0, 0.0}, {0.0, 0.0}}; // [along u or v, other][tension, compression]
     for (const Edge& e : c.edges) {
         if (e.kind != SpringKind::structural && e.kind != SpringKind::shear) continue;
         const double dx = X[e.b] - X[e.a], dy = Y[e.b] - Y[e.a], dz = Z[e.b] - Z[e.a];
         const double stretch = std::sqrt(dx * dx + dy * dy + dz * dz) - e.rest;
         const double k = double(c.material[static_cast<std::size_t>(e.kind)].stiffness) * e.scale;
-        membrane[e.kind == SpringKind::shear ? 1 : 0][stretch < 0.0 ? 1 : 0] += 0.5 * k * stretch * stretch;
+        out.membrane[e.kind == SpringKind::shear ? 1 : 0][stretch < 0.0 ? 1 : 0] += 0.5 * k * stretch * stretch;
     }
-    double gravity = 0.0;
     for (std::size_t i = 0; i < X.size(); ++i) {
         const float inv = c.free_inv_mass.empty() ? c.inv_mass[i] : c.free_inv_mass[i];
-        if (inv > 0.0f) gravity += 9.81 * Y[i] / inv;
+        if (inv > 0.0f) out.gravity += 9.81 * Y[i] / inv;
     }
+    return out;
+}
+
+/// Where on the flat specimen an energy sits: the hinge bending and membrane energies of `energies_of` summed over
+/// rings of the flat circle (a hinge by the middle of its edge, a spring by its middle), bounded by `ring_edges` (m).
+inline constexpr std::array<double, 6> ring_edges{0.09, 0.11, 0.13, 0.14, 0.145, 0.151};
+struct RingEnergies {
+    std::array<double, 5> bending{}, membrane{};
+};
+RingEnergies ring_energies(const Cloth& c, std::span<const float> fx, std::span<const float> fz,
+                           std::span<const float> X, std::span<const float> Y, std::span<const float> Z) {
+    RingEnergies out;
+    const auto ring = [](double r) {
+        for (std::size_t k = 0; k + 1 < ring_edges.size(); ++k)
+            if (r >= ring_edges[k] && r < ring_edges[k + 1]) return int(k);
+        return -1;
+    };
+    for (const BendElement& e : c.bending.elements) {
+        const int k = ring(std::hypot(0.5 * (double(fx[e.v[0]]) + fx[e.v[1]]), 0.5 * (double(fz[e.v[0]]) + fz[e.v[1]])));
+        if (k < 0) continue;
+        double q[3] = {0.0, 0.0, 0.0};
+        for (int j = 0; j < 4; ++j)
+            q[0] += double(e.c[j]) * X[e.v[j]], q[1] += double(e.c[j]) * Y[e.v[j]], q[2] += double(e.c[j]) * Z[e.v[j]];
+        out.bending[k] += 0.5 * e.weight * (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+    }
+    for (const Edge& e : c.edges) {
+        if (e.kind != SpringKind::structural && e.kind != SpringKind::shear) continue;
+        const int k = ring(std::hypot(0.5 * (double(fx[e.a]) + fx[e.b]), 0.5 * (double(fz[e.a]) + fz[e.b])));
+        if (k < 0) continue;
+        const double dx = X[e.b] - X[e.a], dy = Y[e.b] - Y[e.a], dz = Z[e.b] - Z[e.a];
+        const double stretch = std::sqrt(dx * dx + dy * dy + dz * dz) - e.rest;
+        out.membrane[k] += 0.5 * double(c.material[static_cast<std::size_t>(e.kind)].stiffness) * e.scale * stretch * stretch;
+    }
+    return out;
+}
+
+/// --energies: the settled specimen's energies, one line.
+void print_energies(const Simulation& sim) {
+    const Energies e = energies_of(sim.cloth(), sim.x(), sim.y(), sim.z());
     std::printf("  energies (J): bending %.4g, of it in-plane %.2g; membrane along u/v %.3g tension %.3g compression, "
                 "other edges %.3g tension %.3g compression; m g y %.5g\n",
-                normal + in_plane, in_plane, membrane[0][0], membrane[0][1], membrane[1][0], membrane[1][1], gravity);
+                e.bending, e.in_plane, e.membrane[0][0], e.membrane[0][1], e.membrane[1][0], e.membrane[1][1],
+                e.gravity);
 }
 
 /// Settles a built specimen on the disc and measures it. `sp` holds the colliders in the cloth's frame and dt.
@@ -176,9 +219,8 @@ std::uint32_t circle_vertices(double spacing) {
 /// 30 cm square as an outline (4 vertices): the square grid specimen's shape with the circle's mesh model.
 /// `phase` in [0, 1) turns the circle's polygon by that fraction of the angle between its vertices (the same circle,
 /// another mesh of it: the u-v fill lattice and the outline samples fall differently); 0 for the square.
-CusickResult run_cusick_outline(const Fabric& fabric, double spacing, const Drop& drop, bool square,
-                                double phase) {
-    CusickResult r;
+BuiltScene build_outline_specimen(const Fabric& fabric, double spacing, const Drop& drop, bool square, double phase,
+                                  CusickResult& r) {
     SceneSpec spec = cusick_spec(ClothType::outline, fabric);
     OutlineClothSpec& o = spec.outline;
     const std::uint32_t nv = square ? 4 : circle_vertices(spacing);
@@ -200,8 +242,43 @@ CusickResult run_cusick_outline(const Fabric& fabric, double spacing, const Drop
     r.n = nv;
     r.specimen_area = square ? specimen_side * specimen_side
                              : 0.5 * double(nv) * specimen_radius * specimen_radius * std::sin(2.0 * pi / double(nv));
+    return scene;
+}
+
+CusickResult run_cusick_outline(const Fabric& fabric, double spacing, const Drop& drop, bool square, double phase) {
+    CusickResult r;
+    BuiltScene scene = build_outline_specimen(fabric, spacing, drop, square, phase, r);
     settle_and_measure(std::move(scene.cloth), scene.initial, scene.params, drop, r);
     return r;
+}
+
+/// --skirt N: one fixed, smooth skirt with N folds, the same surface on every mesh of the circle (no simulation): flat
+/// within the disc's radius; beyond it, at distance rho from the rim along the flat cloth, the cloth turns down by
+/// phi(rho) = 1.2 (1 - exp(-rho / L)) rad (L = 3 cm) and waves up and down by a (rho / L)^2 / (1 + (rho / L)^2)
+/// cos(N theta) (a = 1.5 cm). Its energies on meshes of spacing h say whether the discrete model itself (not the
+/// drop) makes a coarse skirt cheaper: for a smooth surface they should converge as h falls. `smooth`: phi(rho) =
+/// 1.2 (1 - exp(-(rho / L)^2)) instead, so the curvature starts from 0 at the rim instead of jumping to 40 1/m.
+void skirt_shape(std::span<float> x, std::span<float> y, std::span<float> z, int folds, bool smooth) {
+    constexpr double length = 0.03, amplitude = 0.015, turn = 1.2;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        const double r = std::hypot(double(x[i]), double(z[i])), theta = std::atan2(double(z[i]), double(x[i]));
+        const double rho = std::max(0.0, r - disc_radius);
+        if (rho == 0.0) continue;
+        // s = int_0^rho cos phi, t = int_0^rho sin phi (midpoint rule, 0.05 mm steps)
+        const int steps = std::max(1, static_cast<int>(std::ceil(rho / 5e-5)));
+        double s = 0.0, t = 0.0;
+        for (int k = 0; k < steps; ++k) {
+            const double w = (k + 0.5) * rho / steps / length;
+            const double phi = turn * (1.0 - std::exp(smooth ? -w * w : -w));
+            s += std::cos(phi) * rho / steps;
+            t += std::sin(phi) * rho / steps;
+        }
+        const double q = (rho / length) * (rho / length);
+        const double radius = disc_radius + s;
+        x[i] = static_cast<float>(radius * std::cos(theta));
+        z[i] = static_cast<float>(radius * std::sin(theta));
+        y[i] = static_cast<float>(-t + amplitude * q / (1.0 + q) * std::cos(folds * theta));
+    }
 }
 
 /// The standard's circular specimen as a mask cloth: the cells (row, column) of a u-v grid of spacing h whose centre
@@ -254,6 +331,33 @@ int cmd_cusick(const Options& opt) {
     if (opt.fine) spacings.push_back(0.0025);
     if (!opt.spacings.empty()) spacings = opt.spacings;
     const Drop drop{opt.drag > 0.0 ? opt.drag : 2.0, opt.max_time > 0.0 ? opt.max_time : 6.0, opt.energies, opt.clamp};
+    if (opt.skirt > 0) {
+        std::printf("Energies of one fixed skirt with %d folds (--skirt%s; no simulation) on meshes of the circle; "
+                    "bending and membrane energy also by ring of the flat circle, in mm from its centre\n\n",
+                    opt.skirt, opt.skirt_smooth ? " --skirt-smooth" : "");
+        std::printf("| fabric | h (mm) | sample | particles | bending (J) | of it in-plane | membrane (J) | m g y (J) | "
+                    "bending 90-110 / 110-130 / 130-140 / 140-145 / 145-150 | membrane, same rings |\n");
+        std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---|---|\n");
+        for (const std::string& name : fabrics)
+            for (double h : spacings)
+                for (int k = 0; k < opt.samples; ++k) {
+                    CusickResult r;
+                    const BuiltScene scene =
+                        build_outline_specimen(textile_fabric(name), h, drop, false, double(k) / opt.samples, r);
+                    std::vector<float> x = scene.initial.x, y = scene.initial.y, z = scene.initial.z;
+                    skirt_shape(x, y, z, opt.skirt, opt.skirt_smooth);
+                    const Energies e = energies_of(scene.cloth, x, y, z);
+                    const RingEnergies ring = ring_energies(scene.cloth, scene.initial.x, scene.initial.z, x, y, z);
+                    std::printf("| %s | %.1f | %d | %zu | %.4g | %.2g | %.4g | %.5g | %.3g / %.3g / %.3g / %.3g / %.3g | "
+                                "%.3g / %.3g / %.3g / %.3g / %.3g |\n",
+                                name.c_str(), h * 1e3, k, scene.cloth.particle_count, e.bending, e.in_plane,
+                                e.membrane_total(), e.gravity, ring.bending[0], ring.bending[1], ring.bending[2],
+                                ring.bending[3], ring.bending[4], ring.membrane[0], ring.membrane[1], ring.membrane[2],
+                                ring.membrane[3], ring.membrane[4]);
+                    std::fflush(stdout);
+                }
+        return 0;
+    }
     const bool square = opt.square;
     if (square)
         std::printf("Cusick drape test: square specimen %.0f cm (grid cloth, N x N particles)", specimen_side * 100.0);

@@ -25,6 +25,8 @@ struct Options {
     double shear = 0.0; ///< cusick: > 0 replaces each preset's in-plane shear stiffness, N/m (a diagnostic)
     std::vector<std::pair<std::string, double>> set; ///< cusick: Fabric fields replaced (--set FIELD=VALUE)
     bool energies = false; ///< cusick: print each settled specimen's energies (bending, membrane, gravity)
+    int skirt = 0;         ///< cusick: > 0: energies of a fixed skirt with this many folds on each mesh, no drop
+    bool skirt_smooth = false; ///< cusick --skirt: the skirt's curvature starts from 0 at the rim
     bool clamp = false;    ///< cusick: the specimen clamped between discs (pinned within the disc's radius)
     double stretch_scale = 1.0; ///< cusick: multiplies each preset's stretch_u and stretch_v (a diagnostic)
     double drag = 0.0;  ///< cusick: air drag while the specimen falls and settles, 1/s (0: the default, 2 1/s)
