@@ -41,6 +41,8 @@ struct Drop {
     /// Clamped between two discs as the standard's tester holds it: every particle within the disc's radius of its
     /// axis pinned where it starts (3 mm above the disc); otherwise the specimen rests on the disc by friction.
     bool clamp = false;
+    /// A diagnostic: the hinges whose edge's middle lies within 2 cm past the disc's rim (flat) weigh this much more.
+    double rim_bend = 1.0;
 };
 
 /// A specimen's energies in one configuration (J): the hinge bending energy and the part of it not along each
@@ -144,7 +146,18 @@ void settle_and_measure(Cloth cloth, const InitialState& initial, const Simulati
         for (std::size_t i = 0; i < cloth.particle_count; ++i)
             if (std::hypot(double(initial.x[i]) + origin[0], double(initial.z[i]) + origin[2]) <= disc_radius)
                 cloth.inv_mass[i] = 0.0f;
-    Simulation sim(std::move(cloth), initial, sp);
+    SimulationParams params = sp;
+    if (drop.rim_bend != 1.0) {
+        std::vector<BendElement> elements = cloth.bending.elements;
+        for (BendElement& e : elements) {
+            const double r = std::hypot(0.5 * (double(initial.x[e.v[0]]) + initial.x[e.v[1]]) + origin[0],
+                                        0.5 * (double(initial.z[e.v[0]]) + initial.z[e.v[1]]) + origin[2]);
+            if (r >= disc_radius && r < disc_radius + 0.02) e.weight = static_cast<float>(e.weight * drop.rim_bend);
+        }
+        set_bending(cloth, std::move(elements), cloth.bending.damping);
+        params.dt = static_cast<float>(default_dt(cloth, params));
+    }
+    Simulation sim(std::move(cloth), initial, params);
     // Settled: the fastest particle slower than 1 mm/s, or the cloth's mean height still to 0.1 um per 20 ms.
     const auto mean_height = [](const Simulation& s) {
         double y = 0.0;
@@ -330,7 +343,8 @@ int cmd_cusick(const Options& opt) {
     std::vector<double> spacings = opt.quick ? std::vector<double>{0.02, 0.01} : std::vector<double>{0.02, 0.01, 0.005};
     if (opt.fine) spacings.push_back(0.0025);
     if (!opt.spacings.empty()) spacings = opt.spacings;
-    const Drop drop{opt.drag > 0.0 ? opt.drag : 2.0, opt.max_time > 0.0 ? opt.max_time : 6.0, opt.energies, opt.clamp};
+    const Drop drop{opt.drag > 0.0 ? opt.drag : 2.0, opt.max_time > 0.0 ? opt.max_time : 6.0, opt.energies, opt.clamp,
+                    opt.rim_bend};
     if (opt.skirt > 0) {
         std::printf("Energies of one fixed skirt with %d folds (--skirt%s; no simulation) on meshes of the circle; "
                     "bending and membrane energy also by ring of the flat circle, in mm from its centre\n\n",
@@ -377,6 +391,8 @@ int cmd_cusick(const Options& opt) {
     if (opt.shear > 0.0) std::printf("Every fabric's shear stiffness replaced by %g N/m (--shear)\n\n", opt.shear);
     if (opt.stretch_scale != 1.0)
         std::printf("Every fabric's stretch stiffness (u and v) times %g (--stretch-scale)\n\n", opt.stretch_scale);
+    if (drop.rim_bend != 1.0)
+        std::printf("The hinges within 2 cm past the disc's rim weigh %g times as much (--rim-bend)\n\n", drop.rim_bend);
     if (drop.clamp)
         std::printf("Clamped between discs (--clamp): the particles within %.0f mm of the axis pinned where they start\n\n",
                     disc_radius * 1e3);

@@ -20,7 +20,8 @@
 // density kg/m^2, stretch_u, stretch_v, shear N/m, bend_u, bend_v N*m, damping s; checked by the fabric's own ranges);
 // --skirt N (cusick, circle) prints the energies of one fixed analytic skirt with N folds on each mesh instead of
 // dropping it (does the discrete model make a coarse skirt cheaper?), --skirt-smooth with its curvature starting
-// from 0 at the rim; --clamp (cusick) clamps the specimen between discs as the standard's tester does (the particles within the disc's
+// from 0 at the rim; --rim-bend F (cusick) multiplies the weight of the hinges within 2 cm past the disc's rim by F
+// (a diagnostic of the coarse meshes' cheap bend there); --clamp (cusick) clamps the specimen between discs as the standard's tester does (the particles within the disc's
 // radius pinned where they start) instead of resting it on the disc; --energies (cusick) prints each settled specimen's energies (bending, with its in-plane part; membrane by
 // direction and sign of strain; m g y); --stretch-scale F (cusick) multiplies each fabric's stretch stiffness (u and v) by F (a diagnostic: it moves the
 // fabric's stretching-bending length (B / E)^(1/2) and nothing else); --drag D (cusick) the air drag while the specimen falls and settles, 1/s (default 2; higher lowers it more slowly).
@@ -83,6 +84,13 @@ int main(int argc, char** argv) {
         else if (s == "--energies") opt.energies = true;
         else if (s == "--clamp") opt.clamp = true;
         else if (s == "--skirt-smooth") opt.skirt_smooth = true;
+        else if (s == "--rim-bend" && a + 1 < argc) {
+            opt.rim_bend = std::atof(argv[++a]);
+            if (!(opt.rim_bend >= 0.1 && opt.rim_bend <= 10.0)) {
+                std::fprintf(stderr, "drape_textile: --rim-bend must be in [0.1, 10]\n");
+                return 2;
+            }
+        }
         else if (s == "--skirt" && a + 1 < argc) {
             opt.skirt = std::atoi(argv[++a]);
             if (!(opt.skirt >= 1 && opt.skirt <= 64)) {

@@ -27,6 +27,7 @@ struct Options {
     bool energies = false; ///< cusick: print each settled specimen's energies (bending, membrane, gravity)
     int skirt = 0;         ///< cusick: > 0: energies of a fixed skirt with this many folds on each mesh, no drop
     bool skirt_smooth = false; ///< cusick --skirt: the skirt's curvature starts from 0 at the rim
+    double rim_bend = 1.0; ///< cusick: weight factor of the hinges within 2 cm past the disc's rim (a diagnostic)
     bool clamp = false;    ///< cusick: the specimen clamped between discs (pinned within the disc's radius)
     double stretch_scale = 1.0; ///< cusick: multiplies each preset's stretch_u and stretch_v (a diagnostic)
     double drag = 0.0;  ///< cusick: air drag while the specimen falls and settles, 1/s (0: the default, 2 1/s)
