@@ -24,6 +24,17 @@ constexpr double pi = 3.14159265358979323846;
 constexpr double disc_radius = 0.09, specimen_side = 0.30, specimen_radius = 0.15;
 constexpr double drop_height = 0.002; ///< m above the disc's collision margin
 
+/// A specimen's energies in one configuration (J): the hinge bending energy and the part of it not along each
+/// hinge's current normal (the quadratic model's q_e also sees non-affine in-plane motion); the membrane springs'
+/// energy along u or v and on the other edges (diagonals, cut edges), each split by the sign of the strain; m g y
+/// over the free particles (g = 9.81 m/s^2, y in the cloth's frame).
+struct Energies {
+    double bending = 0.0, in_plane = 0.0;
+    double membrane[2][2] = {{0.0, 0.0}, {0.0, 0.0}}; ///< [along u or v, other edges][tension, compression]
+    double gravity = 0.0;
+    double membrane_total() const { return membrane[0][0] + membrane[0][1] + membrane[1][0] + membrane[1][1]; }
+};
+
 struct CusickResult {
     std::uint32_t n = 0;
     std::size_t particles = 0;
@@ -32,7 +43,29 @@ struct CusickResult {
     double r_min = 0.0, r_max = 0.0; ///< m, radial profile
     SettleStats settle;
     TopView view;
+    Energies energies; ///< of the settled specimen, with --energies
 };
+
+/// The preset `name` with the command line's diagnostic overrides (--shear, --stretch-scale, then each --set in
+/// order), checked by validate_fabric.
+Fabric overridden_fabric(const std::string& name, const Options& opt) {
+    Fabric fabric = textile_fabric(name);
+    if (opt.shear > 0.0) fabric.shear = static_cast<float>(opt.shear);
+    fabric.stretch_u = static_cast<float>(fabric.stretch_u * opt.stretch_scale);
+    fabric.stretch_v = static_cast<float>(fabric.stretch_v * opt.stretch_scale);
+    for (const auto& [key, value] : opt.set) {
+        float* field = key == "density"     ? &fabric.density
+                       : key == "stretch_u" ? &fabric.stretch_u
+                       : key == "stretch_v" ? &fabric.stretch_v
+                       : key == "shear"     ? &fabric.shear
+                       : key == "bend_u"    ? &fabric.bend_u
+                       : key == "bend_v"    ? &fabric.bend_v
+                                            : &fabric.damping;
+        *field = static_cast<float>(value);
+    }
+    validate_fabric(fabric, "drape_textile cusick " + name + " with --shear, --stretch-scale or --set (in SI units)");
+    return fabric;
+}
 
 /// How a specimen falls and settles: air drag (1/s), the settling time limit (s), and whether to print its energies.
 struct Drop {
@@ -43,17 +76,6 @@ struct Drop {
     bool clamp = false;
     /// A diagnostic: the hinges whose edge's middle lies within 2 cm past the disc's rim (flat) weigh this much more.
     double rim_bend = 1.0;
-};
-
-/// A specimen's energies in one configuration (J): the hinge bending energy and the part of it not along each
-/// hinge's current normal (the quadratic model's q_e also sees non-affine in-plane motion); the membrane springs'
-/// energy along u or v and on the other edges (diagonals, cut edges), each split by the sign of the strain; m g y
-/// over the free particles (g = 9.81 m/s^2, y in the cloth's frame).
-struct Energies {
-    double bending = 0.0, in_plane = 0.0;
-    double membrane[2][2] = {{0.0, 0.0}, {0.0, 0.0}}; ///< [along u or v, other edges][tension, compression]
-    double gravity = 0.0;
-    double membrane_total() const { return membrane[0][0] + membrane[0][1] + membrane[1][0] + membrane[1][1]; }
 };
 
 Energies energies_of(const Cloth& c, std::span<const float> X, std::span<const float> Y, std::span<const float> Z) {
@@ -127,13 +149,13 @@ RingEnergies ring_energies(const Cloth& c, std::span<const float> fx, std::span<
     return out;
 }
 
-/// --energies: the settled specimen's energies, one line.
-void print_energies(const Simulation& sim) {
-    const Energies e = energies_of(sim.cloth(), sim.x(), sim.y(), sim.z());
-    std::printf("  energies (J): bending %.4g, of it in-plane %.2g; membrane along u/v %.3g tension %.3g compression, "
-                "other edges %.3g tension %.3g compression; m g y %.5g\n",
-                e.bending, e.in_plane, e.membrane[0][0], e.membrane[0][1], e.membrane[1][0], e.membrane[1][1],
-                e.gravity);
+/// --energies: a settled specimen's energies as a row of the table printed after the drops.
+std::string energies_row(const std::string& fabric, double h, int sample, const Energies& e) {
+    char row[400];
+    std::snprintf(row, sizeof row, "| %s | %.1f | %d | %.4g | %.2g | %.3g | %.3g | %.3g | %.3g | %.5g |\n",
+                  fabric.c_str(), h * 1e3, sample, e.bending, e.in_plane, e.membrane[0][0], e.membrane[0][1],
+                  e.membrane[1][0], e.membrane[1][1], e.gravity);
+    return row;
 }
 
 /// Settles a built specimen on the disc and measures it. `sp` holds the colliders in the cloth's frame and dt.
@@ -165,7 +187,7 @@ void settle_and_measure(Cloth cloth, const InitialState& initial, const Simulati
         return y / double(s.y().size());
     };
     r.settle = settle(sim, drop.max_time, 1e-3, 0.02, 5, mean_height, 1e-7);
-    if (drop.energies) print_energies(sim);
+    if (drop.energies) r.energies = energies_of(sim.cloth(), sim.x(), sim.y(), sim.z());
     // The raster is centred on the disc axis: positions back into the world frame (x, z only; y is shading).
     std::vector<float> x(sim.x().begin(), sim.x().end()), z(sim.z().begin(), sim.z().end());
     for (float& v : x) v = static_cast<float>(double(v) + origin[0]);
@@ -345,7 +367,15 @@ int cmd_cusick(const Options& opt) {
     if (!opt.spacings.empty()) spacings = opt.spacings;
     const Drop drop{opt.drag > 0.0 ? opt.drag : 2.0, opt.max_time > 0.0 ? opt.max_time : 6.0, opt.energies, opt.clamp,
                     opt.rim_bend};
+    const auto print_overrides = [&] {
+        if (opt.shear > 0.0) std::printf("Every fabric's shear stiffness replaced by %g N/m (--shear)\n\n", opt.shear);
+        if (opt.stretch_scale != 1.0)
+            std::printf("Every fabric's stretch stiffness (u and v) times %g (--stretch-scale)\n\n", opt.stretch_scale);
+        for (const auto& [key, value] : opt.set)
+            std::printf("Every fabric's %s set to %g (--set, after --shear and --stretch-scale)\n\n", key.c_str(), value);
+    };
     if (opt.skirt > 0) {
+        print_overrides();
         std::printf("Energies of one fixed skirt with %d folds (--skirt%s; no simulation) on meshes of the circle; "
                     "bending and membrane energy also by ring of the flat circle, in mm from its centre\n\n",
                     opt.skirt, opt.skirt_smooth ? " --skirt-smooth" : "");
@@ -357,7 +387,7 @@ int cmd_cusick(const Options& opt) {
                 for (int k = 0; k < opt.samples; ++k) {
                     CusickResult r;
                     const BuiltScene scene =
-                        build_outline_specimen(textile_fabric(name), h, drop, false, double(k) / opt.samples, r);
+                        build_outline_specimen(overridden_fabric(name, opt), h, drop, false, double(k) / opt.samples, r);
                     std::vector<float> x = scene.initial.x, y = scene.initial.y, z = scene.initial.z;
                     skirt_shape(x, y, z, opt.skirt, opt.skirt_smooth);
                     const Energies e = energies_of(scene.cloth, x, y, z);
@@ -388,15 +418,12 @@ int cmd_cusick(const Options& opt) {
                 "%.1f 1/s, settled (max speed < 1 mm/s, or the mean height still to 0.1 um per 20 ms, at 5 checks in "
                 "a row; else %.0f s); shadow rasterised at 0.5 mm; DC = (shadow - disc) / (specimen - disc)\n\n",
                 disc_radius * 1e3, (drop_height + 0.001) * 1e3, drop.drag, drop.max_time);
-    if (opt.shear > 0.0) std::printf("Every fabric's shear stiffness replaced by %g N/m (--shear)\n\n", opt.shear);
-    if (opt.stretch_scale != 1.0)
-        std::printf("Every fabric's stretch stiffness (u and v) times %g (--stretch-scale)\n\n", opt.stretch_scale);
+    print_overrides();
     if (drop.rim_bend != 1.0)
         std::printf("The hinges within 2 cm past the disc's rim weigh %g times as much (--rim-bend)\n\n", drop.rim_bend);
     if (drop.clamp)
         std::printf("Clamped between discs (--clamp): the particles within %.0f mm of the axis pinned where they start\n\n",
                     disc_radius * 1e3);
-    for (const auto& [key, value] : opt.set) std::printf("Every fabric's %s set to %g (--set)\n\n", key.c_str(), value);
     const int samples = opt.samples; // [1, 64], checked by main
     if (samples > 1)
         std::printf("%d meshes of each specimen (sample k: %s k / %d); the summary gives their mean DC and its "
@@ -415,23 +442,10 @@ int cmd_cusick(const Options& opt) {
         std::string folds;
     };
     std::vector<Summary> summary;
+    std::string energy_rows; // --energies: printed after the drops, a table of its own
     for (const std::string& name : fabrics)
         for (double h : spacings) {
-            Fabric fabric = textile_fabric(name);
-            if (opt.shear > 0.0) fabric.shear = static_cast<float>(opt.shear);
-            fabric.stretch_u = static_cast<float>(fabric.stretch_u * opt.stretch_scale);
-            fabric.stretch_v = static_cast<float>(fabric.stretch_v * opt.stretch_scale);
-            for (const auto& [key, value] : opt.set) {
-                float* field = key == "density"     ? &fabric.density
-                               : key == "stretch_u" ? &fabric.stretch_u
-                               : key == "stretch_v" ? &fabric.stretch_v
-                               : key == "shear"     ? &fabric.shear
-                               : key == "bend_u"    ? &fabric.bend_u
-                               : key == "bend_v"    ? &fabric.bend_v
-                                                    : &fabric.damping;
-                *field = static_cast<float>(value);
-            }
-            validate_fabric(fabric, "drape_textile cusick --set");
+            const Fabric fabric = overridden_fabric(name, opt);
             Summary sum{name, h, {}, ""};
             for (int k = 0; k < samples; ++k) {
                 const double phase = double(k) / double(samples);
@@ -446,6 +460,7 @@ int cmd_cusick(const Options& opt) {
                             r.r_max * 1e3, r.settle.sim_time, r.settle.settled ? "" : " (not settled)", r.settle.steps,
                             r.settle.wall);
                 std::fflush(stdout);
+                if (drop.energies) energy_rows += energies_row(name, h, k, r.energies);
                 sum.dc.push_back(r.dc);
                 sum.folds += (k ? " / " : "") + std::to_string(r.folds);
                 if (!opt.png_dir.empty() && h == spacings.back() && k == 0) {
@@ -462,6 +477,12 @@ int cmd_cusick(const Options& opt) {
             }
             summary.push_back(sum);
         }
+    if (drop.energies)
+        std::printf("\nEnergies of each settled specimen (J; --energies): hinge bending and the part of it not along the "
+                    "hinges' normals; membrane springs along u or v and on the other edges, by sign of strain; m g y\n\n"
+                    "| fabric | h (mm) | sample | bending | of it in-plane | u/v tension | u/v compression | other "
+                    "tension | other compression | m g y |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n%s",
+                    energy_rows.c_str());
     if (samples > 1) {
         std::printf("\n| fabric | h (mm) | DC mean | DC sd | DC min - max | folds |\n|---|---:|---:|---:|---|---|\n");
         for (const Summary& m : summary) {

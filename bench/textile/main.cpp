@@ -130,7 +130,12 @@ int main(int argc, char** argv) {
             const std::string kv = argv[++a];
             const std::size_t eq = kv.find('=');
             const std::string key = kv.substr(0, eq);
-            const double value = eq == std::string::npos ? -1.0 : std::atof(kv.c_str() + eq + 1);
+            double value = -1.0;
+            if (eq != std::string::npos && eq + 1 < kv.size()) {
+                char* end = nullptr;
+                value = std::strtod(kv.c_str() + eq + 1, &end);
+                if (*end != '\0') value = -1.0; // not a number to the end
+            }
             static const char* keys[] = {"density", "stretch_u", "stretch_v", "shear", "bend_u", "bend_v", "damping"};
             bool known = false;
             for (const char* k : keys) known = known || key == k;
@@ -159,6 +164,18 @@ int main(int argc, char** argv) {
     if (int(opt.square) + int(opt.square_outline) + int(opt.mask_circle) > 1) {
         std::fprintf(stderr, "drape_textile: --square (a grid cloth), --square-outline (an outline cloth) and "
                              "--mask-circle (a mask cloth) exclude each other\n");
+        return 2;
+    }
+    if (opt.square && (opt.energies || opt.rim_bend != 1.0)) {
+        std::fprintf(stderr, "drape_textile: --energies and --rim-bend take hinge (triangle-mesh) bending: the circle "
+                             "or --square-outline, not the --square grid cloth\n");
+        return 2;
+    }
+    if (opt.skirt > 0 && (opt.square || opt.square_outline || opt.mask_circle || opt.clamp || opt.energies ||
+                          opt.rim_bend != 1.0 || opt.samples < 1)) {
+        std::fprintf(stderr, "drape_textile: --skirt measures the outline circle without dropping it: it takes --fabric, "
+                             "--spacing, --samples and the fabric overrides (--set, --shear, --stretch-scale), not "
+                             "--square, --square-outline, --mask-circle, --clamp, --energies or --rim-bend\n");
         return 2;
     }
     if (opt.samples > 1 && (opt.square || opt.square_outline)) {
