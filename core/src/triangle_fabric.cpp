@@ -56,8 +56,9 @@ double edge_modulus(const Fabric& f, double cos2, WeaveAlignment alignment) {
 NeedleTriangleError::NeedleTriangleError(std::uint32_t a_, std::uint32_t b_, double ratio_)
     : InvalidInput("membrane spring " + std::to_string(a_) + "-" + std::to_string(b_) + " would be " +
                    std::to_string(static_cast<long long>(std::lround(ratio_))) +
-                   " times as stiff as the fabric (at most 1000): a needle triangle (a short edge across a wide "
-                   "triangle); remesh there"),
+                   " times as stiff as the fabric (at most " +
+                   std::to_string(static_cast<long long>(membrane_stiffness_ratio_max)) +
+                   "): a needle triangle (a short edge across a wide triangle); remesh there"),
       a(a_), b(b_), ratio(ratio_) {}
 
 std::vector<double> membrane_stiffness(std::span<const float> x, std::span<const float> y,
