@@ -62,6 +62,19 @@ int cmd_elastica() {
     return 0;
 }
 
+/// A number option's value: the whole text read as a number in [lo, hi], else the message (naming `name`, the range
+/// and `unit`) and false.
+bool ranged_number(const char* text, const char* name, double lo, double hi, const char* unit, double& out) {
+    char* end = nullptr;
+    const double v = std::strtod(text, &end);
+    if (end == text || *end != '\0' || !(v >= lo && v <= hi)) {
+        std::fprintf(stderr, "drape_textile: %s must be in [%g, %g]%s\n", name, lo, hi, unit);
+        return false;
+    }
+    out = v;
+    return true;
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -85,46 +98,34 @@ int main(int argc, char** argv) {
         else if (s == "--clamp") opt.clamp = true;
         else if (s == "--skirt-smooth") opt.skirt_smooth = true;
         else if (s == "--rim-bend" && a + 1 < argc) {
-            opt.rim_bend = std::atof(argv[++a]);
-            if (!(opt.rim_bend >= 0.1 && opt.rim_bend <= 10.0)) {
-                std::fprintf(stderr, "drape_textile: --rim-bend must be in [0.1, 10]\n");
-                return 2;
-            }
+            if (!ranged_number(argv[++a], "--rim-bend", 0.1, 10.0, "", opt.rim_bend)) return 2;
         }
         else if (s == "--skirt" && a + 1 < argc) {
-            opt.skirt = std::atoi(argv[++a]);
-            if (!(opt.skirt >= 1 && opt.skirt <= 64)) {
-                std::fprintf(stderr, "drape_textile: --skirt must be a fold count in [1, 64]\n");
+            double v = 0.0;
+            if (!ranged_number(argv[++a], "--skirt", 1.0, 64.0, " (a fold count)", v)) return 2;
+            if (v != std::floor(v)) {
+                std::fprintf(stderr, "drape_textile: %s must be a whole number\n", argv[a - 1]);
                 return 2;
             }
+            opt.skirt = static_cast<int>(v);
         }
         else if (s == "--max-time" && a + 1 < argc) {
-            opt.max_time = std::atof(argv[++a]);
-            if (!(opt.max_time > 0.0 && opt.max_time <= 600.0)) {
-                std::fprintf(stderr, "drape_textile: --max-time must be in (0, 600] s\n");
-                return 2;
-            }
+            if (!ranged_number(argv[++a], "--max-time", 1e-3, 600.0, " s", opt.max_time)) return 2;
         }
         else if (s == "--samples" && a + 1 < argc) {
-            opt.samples = std::atoi(argv[++a]);
-            if (!(opt.samples >= 1 && opt.samples <= 64)) {
-                std::fprintf(stderr, "drape_textile: --samples must be in [1, 64]\n");
+            double v = 0.0;
+            if (!ranged_number(argv[++a], "--samples", 1.0, 64.0, "", v)) return 2;
+            if (v != std::floor(v)) {
+                std::fprintf(stderr, "drape_textile: %s must be a whole number\n", argv[a - 1]);
                 return 2;
             }
+            opt.samples = static_cast<int>(v);
         }
         else if (s == "--shear" && a + 1 < argc) {
-            opt.shear = std::atof(argv[++a]);
-            if (!(opt.shear >= 0.01 && opt.shear <= 1e6)) {
-                std::fprintf(stderr, "drape_textile: --shear must be in [0.01, 1e6] N/m\n");
-                return 2;
-            }
+            if (!ranged_number(argv[++a], "--shear", 0.01, 1e6, " N/m", opt.shear)) return 2;
         }
         else if (s == "--stretch-scale" && a + 1 < argc) {
-            opt.stretch_scale = std::atof(argv[++a]);
-            if (!(opt.stretch_scale >= 1e-3 && opt.stretch_scale <= 1e3)) {
-                std::fprintf(stderr, "drape_textile: --stretch-scale must be in [0.001, 1000]\n");
-                return 2;
-            }
+            if (!ranged_number(argv[++a], "--stretch-scale", 1e-3, 1e3, "", opt.stretch_scale)) return 2;
         }
         else if (s == "--set" && a + 1 < argc) {
             const std::string kv = argv[++a];
@@ -147,11 +148,7 @@ int main(int argc, char** argv) {
             opt.set.emplace_back(key, value);
         }
         else if (s == "--drag" && a + 1 < argc) {
-            opt.drag = std::atof(argv[++a]);
-            if (!(opt.drag >= 0.1 && opt.drag <= 100.0)) {
-                std::fprintf(stderr, "drape_textile: --drag must be in [0.1, 100] 1/s\n");
-                return 2;
-            }
+            if (!ranged_number(argv[++a], "--drag", 0.1, 100.0, " 1/s", opt.drag)) return 2;
         }
         else if (s == "--spacing" && a + 1 < argc) opt.spacings.push_back(std::atof(argv[++a]));
         else if (s == "--n" && a + 1 < argc) opt.sizes.push_back(static_cast<std::uint32_t>(std::atoi(argv[++a])));
