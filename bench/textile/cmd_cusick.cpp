@@ -385,6 +385,7 @@ int cmd_cusick(const Options& opt) {
         for (const std::string& name : fabrics)
             for (double h : spacings)
                 for (int k = 0; k < opt.samples; ++k) {
+                    if (opt.sample >= 0 && k != opt.sample) continue; // --sample: one mesh of the ensemble
                     CusickResult r;
                     const BuiltScene scene =
                         build_outline_specimen(overridden_fabric(name, opt), h, drop, false, double(k) / opt.samples, r);
@@ -448,6 +449,7 @@ int cmd_cusick(const Options& opt) {
             const Fabric fabric = overridden_fabric(name, opt);
             Summary sum{name, h, {}, ""};
             for (int k = 0; k < samples; ++k) {
+                if (opt.sample >= 0 && k != opt.sample) continue; // --sample: one mesh of the ensemble
                 const double phase = double(k) / double(samples);
                 const CusickResult r =
                     square            ? run_cusick_square(fabric, h, drop)
@@ -483,7 +485,7 @@ int cmd_cusick(const Options& opt) {
                     "| fabric | h (mm) | sample | bending | of it in-plane | u/v tension | u/v compression | other "
                     "tension | other compression | m g y |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n%s",
                     energy_rows.c_str());
-    if (samples > 1) {
+    if (samples > 1 && opt.sample < 0) {
         std::printf("\n| fabric | h (mm) | DC mean | DC sd | DC min - max | folds |\n|---|---:|---:|---:|---|---|\n");
         for (const Summary& m : summary) {
             const double n = double(m.dc.size());

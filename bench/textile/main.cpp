@@ -16,6 +16,7 @@
 // replaces each fabric's in-plane shear stiffness by G N/m (G = stretch / 2 makes a woven's edge modulus the same in
 // every direction: a diagnostic of the weave-aligned edge springs); --samples K (cusick, circle) K meshes of each
 // specimen (the circle turned, or moved off the cell lattice, by k / K of a step), with the mean DC and its spread;
+// --sample I (cusick) only mesh I (0-based) of the K, so that one ensemble can run in several processes;
 // --set FIELD=VALUE (cusick, repeatable) sets one Fabric field of every fabric, in the struct's units (a diagnostic:
 // density kg/m^2, stretch_u, stretch_v, shear N/m, bend_u, bend_v N*m, damping s; checked by the fabric's own ranges);
 // --skirt N (cusick, circle) prints the energies of one fixed analytic skirt with N folds on each mesh instead of
@@ -121,6 +122,15 @@ int main(int argc, char** argv) {
             }
             opt.samples = static_cast<int>(v);
         }
+        else if (s == "--sample" && a + 1 < argc) {
+            double v = 0.0;
+            if (!ranged_number(argv[++a], "--sample", 0.0, 63.0, " (0-based, below --samples)", v)) return 2;
+            if (v != std::floor(v)) {
+                std::fprintf(stderr, "drape_textile: %s must be a whole number\n", argv[a - 1]);
+                return 2;
+            }
+            opt.sample = static_cast<int>(v);
+        }
         else if (s == "--shear" && a + 1 < argc) {
             if (!ranged_number(argv[++a], "--shear", 0.01, 1e6, " N/m", opt.shear)) return 2;
         }
@@ -178,6 +188,11 @@ int main(int argc, char** argv) {
     if (opt.samples > 1 && (opt.square || opt.square_outline)) {
         std::fprintf(stderr, "drape_textile: --samples takes the circle (outline or --mask-circle): a square has one "
                              "mesh on the weave's grid\n");
+        return 2;
+    }
+    if (opt.sample >= opt.samples) {
+        std::fprintf(stderr, "drape_textile: --sample %d names no mesh: --samples %d gives meshes 0 to %d\n", opt.sample,
+                     opt.samples, opt.samples - 1);
         return 2;
     }
     if (cmd == "elastica") return cmd_elastica();

@@ -22,6 +22,7 @@ struct Options {
     std::string png_dir;
     std::vector<std::string> fabrics;
     int samples = 1;    ///< cusick: meshes of each specimen (other lattice phases of the same circle), mean DC reported
+    int sample = -1;    ///< cusick: only this one of the `samples` meshes (0-based; -1 all), to split an ensemble
     double shear = 0.0; ///< cusick: > 0 replaces each preset's in-plane shear stiffness, N/m (a diagnostic)
     std::vector<std::pair<std::string, double>> set; ///< cusick: Fabric fields replaced (--set FIELD=VALUE)
     bool energies = false; ///< cusick: print each settled specimen's energies (bending, membrane, gravity)
