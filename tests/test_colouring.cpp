@@ -6,7 +6,7 @@
 
 #include "drape/colouring.hpp"
 #include "drape/errors.hpp"
-#include "drape/panels.hpp"
+#include "drape/tshirt.hpp"
 #include "drape/scene_hang.hpp"
 
 namespace drape {

@@ -7,7 +7,7 @@
 #include <random>
 
 #include "drape/errors.hpp"
-#include "drape/panels.hpp"
+#include "drape/delaunay.hpp"
 
 namespace drape {
 namespace {

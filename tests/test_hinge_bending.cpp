@@ -12,7 +12,7 @@
 
 #include "drape/bending.hpp"
 #include "drape/errors.hpp"
-#include "drape/panels.hpp"
+#include "drape/outline_panel.hpp"
 
 namespace drape {
 namespace {

@@ -17,7 +17,7 @@
 #include "closest_points.hpp"
 #include "self_collide_patches.hpp"
 #include "drape/fabric.hpp"
-#include "drape/panels.hpp"
+#include "drape/tshirt.hpp"
 #include "drape/scene.hpp"
 #include "drape/scene_hang.hpp"
 #include "drape/scene_write.hpp"

@@ -13,7 +13,8 @@
 
 #include "drape/bending.hpp"
 #include "drape/errors.hpp"
-#include "drape/panels.hpp"
+#include "drape/outline_panel.hpp"
+#include "drape/pattern_seams.hpp"
 #include "drape/scene.hpp"
 #include "drape/simulation.hpp"
 #include "drape/triangle_fabric.hpp"

@@ -8,7 +8,7 @@
 
 #include "drape/colliders.hpp"
 #include "drape/garment_figures.hpp"
-#include "drape/panels.hpp"
+#include "drape/tshirt.hpp"
 #include "drape/scene.hpp"
 #include "drape/simulation.hpp"
 #include "drape/triangle_contact.hpp"

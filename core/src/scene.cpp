@@ -28,6 +28,7 @@
 #include "drape/bending.hpp"
 #include "drape/errors.hpp"
 #include "drape/level_transfer.hpp"
+#include "drape/pattern_seams.hpp"
 #include "drape/stability.hpp"
 #include "drape/triangle_fabric.hpp"
 

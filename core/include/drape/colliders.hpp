@@ -84,7 +84,7 @@ Collider translated(const Collider& collider, const std::array<double, 3>& offse
 /// and the allowed range.
 void check_collider(const Collider& collider);
 
-/// The default body for the T-shirt (TShirtParams in panels.hpp), in the same frame: y up, facing +z, origin
+/// The default body for the T-shirt (TShirtParams in tshirt.hpp), in the same frame: y up, facing +z, origin
 /// at the torso centre. Ellipsoids (centre; semi-axes), m:
 ///   torso     (0, 0, 0);        (0.16, 0.30, 0.10)
 ///   hips      (0, -0.30, 0);    (0.17, 0.15, 0.11)

@@ -8,7 +8,7 @@
 #include <span>
 #include <vector>
 
-#include "drape/panels.hpp"
+#include "drape/tshirt.hpp"
 #include "drape/simulation.hpp"
 
 namespace drape {

@@ -23,7 +23,7 @@
 #include <string>
 #include <vector>
 
-#include "drape/panels.hpp"
+#include "drape/garment_assembly.hpp"
 
 namespace drape {
 

@@ -12,7 +12,9 @@
 
 #include "drape/colliders.hpp"
 #include "drape/mesh_cloth.hpp"
-#include "drape/panels.hpp"
+#include "drape/mask_panel.hpp"
+#include "drape/outline_panel.hpp"
+#include "drape/tshirt.hpp"
 #include "drape/scene_hang.hpp"
 #include "drape/simulation.hpp"
 

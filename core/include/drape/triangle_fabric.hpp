@@ -24,7 +24,7 @@
 #include "drape/cloth.hpp"
 #include "drape/errors.hpp"
 #include "drape/fabric.hpp"
-#include "drape/panels.hpp"
+#include "drape/garment_assembly.hpp"
 
 namespace drape {
 
