@@ -76,6 +76,18 @@ bool ranged_number(const char* text, const char* name, double lo, double hi, con
     return true;
 }
 
+/// ranged_number for a whole number (a count or an index).
+bool ranged_whole_number(const char* text, const char* name, double lo, double hi, const char* unit, int& out) {
+    double v = 0.0;
+    if (!ranged_number(text, name, lo, hi, unit, v)) return false;
+    if (v != std::floor(v)) {
+        std::fprintf(stderr, "drape_textile: %s must be a whole number\n", name);
+        return false;
+    }
+    out = static_cast<int>(v);
+    return true;
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -102,34 +114,17 @@ int main(int argc, char** argv) {
             if (!ranged_number(argv[++a], "--rim-bend", 0.1, 10.0, "", opt.rim_bend)) return 2;
         }
         else if (s == "--skirt" && a + 1 < argc) {
-            double v = 0.0;
-            if (!ranged_number(argv[++a], "--skirt", 1.0, 64.0, " (a fold count)", v)) return 2;
-            if (v != std::floor(v)) {
-                std::fprintf(stderr, "drape_textile: %s must be a whole number\n", argv[a - 1]);
-                return 2;
-            }
-            opt.skirt = static_cast<int>(v);
+            if (!ranged_whole_number(argv[++a], "--skirt", 1.0, 64.0, " (a fold count)", opt.skirt)) return 2;
         }
         else if (s == "--max-time" && a + 1 < argc) {
             if (!ranged_number(argv[++a], "--max-time", 1e-3, 600.0, " s", opt.max_time)) return 2;
         }
         else if (s == "--samples" && a + 1 < argc) {
-            double v = 0.0;
-            if (!ranged_number(argv[++a], "--samples", 1.0, 64.0, "", v)) return 2;
-            if (v != std::floor(v)) {
-                std::fprintf(stderr, "drape_textile: %s must be a whole number\n", argv[a - 1]);
-                return 2;
-            }
-            opt.samples = static_cast<int>(v);
+            if (!ranged_whole_number(argv[++a], "--samples", 1.0, 64.0, "", opt.samples)) return 2;
         }
         else if (s == "--sample" && a + 1 < argc) {
-            double v = 0.0;
-            if (!ranged_number(argv[++a], "--sample", 0.0, 63.0, " (0-based, below --samples)", v)) return 2;
-            if (v != std::floor(v)) {
-                std::fprintf(stderr, "drape_textile: %s must be a whole number\n", argv[a - 1]);
+            if (!ranged_whole_number(argv[++a], "--sample", 0.0, 63.0, " (0-based, below --samples)", opt.sample))
                 return 2;
-            }
-            opt.sample = static_cast<int>(v);
         }
         else if (s == "--shear" && a + 1 < argc) {
             if (!ranged_number(argv[++a], "--shear", 0.01, 1e6, " N/m", opt.shear)) return 2;
