@@ -67,6 +67,10 @@ Fabric overridden_fabric(const std::string& name, const Options& opt) {
     return fabric;
 }
 
+/// The meshes of the ensemble this run measures: all `samples`, or with --sample only that one.
+int first_sample(const Options& opt) { return opt.sample >= 0 ? opt.sample : 0; }
+int end_sample(const Options& opt) { return opt.sample >= 0 ? opt.sample + 1 : opt.samples; }
+
 /// How a specimen falls and settles: air drag (1/s), the settling time limit (s), and whether to print its energies.
 struct Drop {
     double drag = 2.0, max_time = 6.0;
@@ -384,8 +388,7 @@ int cmd_cusick(const Options& opt) {
         std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---|---|\n");
         for (const std::string& name : fabrics)
             for (double h : spacings)
-                for (int k = 0; k < opt.samples; ++k) {
-                    if (opt.sample >= 0 && k != opt.sample) continue; // --sample: one mesh of the ensemble
+                for (int k = first_sample(opt); k < end_sample(opt); ++k) {
                     CusickResult r;
                     const BuiltScene scene =
                         build_outline_specimen(overridden_fabric(name, opt), h, drop, false, double(k) / opt.samples, r);
@@ -448,8 +451,7 @@ int cmd_cusick(const Options& opt) {
         for (double h : spacings) {
             const Fabric fabric = overridden_fabric(name, opt);
             Summary sum{name, h, {}, ""};
-            for (int k = 0; k < samples; ++k) {
-                if (opt.sample >= 0 && k != opt.sample) continue; // --sample: one mesh of the ensemble
+            for (int k = first_sample(opt); k < end_sample(opt); ++k) {
                 const double phase = double(k) / double(samples);
                 const CusickResult r =
                     square            ? run_cusick_square(fabric, h, drop)
@@ -465,7 +467,7 @@ int cmd_cusick(const Options& opt) {
                 if (drop.energies) energy_rows += energies_row(name, h, k, r.energies);
                 sum.dc.push_back(r.dc);
                 sum.folds += (k ? " / " : "") + std::to_string(r.folds);
-                if (!opt.png_dir.empty() && h == spacings.back() && k == 0) {
+                if (!opt.png_dir.empty() && h == spacings.back() && k == first_sample(opt)) {
                     const std::string path = opt.png_dir + (square                ? "/cusick_"
                                                             : opt.square_outline ? "/cusick_square_outline_"
                                                             : opt.mask_circle    ? "/cusick_mask_circle_"
