@@ -6,6 +6,7 @@
 #include <string>
 
 #include "drape/errors.hpp"
+#include "range_check.hpp"
 
 namespace drape {
 
@@ -28,12 +29,6 @@ const char* collider_kind_name(ColliderKind kind) noexcept {
 namespace {
 
 constexpr float max_extent = 1000.0f; // m: sizes and coordinates
-
-void check_range(const std::string& name, float value, float lo, float hi, const char* unit) {
-    if (!(value >= lo && value <= hi))
-        throw InvalidInput(name + " = " + std::to_string(value) + unit + " is outside the allowed range [" +
-                           std::to_string(lo) + ", " + std::to_string(hi) + "]");
-}
 
 void check_positive(const std::string& name, float value, const char* unit) {
     if (!(value > 0.0f && value <= max_extent))

@@ -1,6 +1,6 @@
 // Helpers shared by the panel builders (mask_panel.cpp, tshirt.cpp, outline_panel.cpp, garment_assembly.cpp,
-// pattern_seams.cpp): range checks that name the value and its allowed range, the panel frame's check, placing a
-// particle, and an order-free key for a particle pair. Internal to core.
+// pattern_seams.cpp): the panel frame's check, placing a particle, and an order-free key for a particle pair (the range
+// check is range_check.hpp's, shared with colliders and grid scenes). Internal to core.
 #pragma once
 
 #include <cmath>
@@ -11,17 +11,12 @@
 
 #include "drape/errors.hpp"
 #include "drape/garment_assembly.hpp"
+#include "range_check.hpp"
 
 namespace drape::panel_build {
 
 // Largest particle count of an assembly (cook_cloth refuses 2^31 and more).
 inline constexpr std::size_t assembly_max_particles = (std::size_t{1} << 31) - 1;
-
-template <class T> void check_range(const std::string& name, T value, T lo, T hi, const char* unit) {
-    if (!(value >= lo && value <= hi))
-        throw InvalidInput(name + " = " + std::to_string(value) + unit + " is outside the allowed range [" +
-                           std::to_string(lo) + ", " + std::to_string(hi) + "]");
-}
 
 inline void check_frame(const PanelFrame& f) {
     auto dot = [](const std::array<float, 3>& a, const std::array<float, 3>& b) {

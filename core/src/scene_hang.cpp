@@ -8,16 +8,11 @@
 #include "drape/bending.hpp"
 #include "drape/errors.hpp"
 #include "drape/level_transfer.hpp"
+#include "range_check.hpp"
 
 namespace drape {
 
 namespace {
-
-template <class T> void check_range(const char* name, T value, T lo, T hi, const char* unit) {
-    if (!(value >= lo && value <= hi))
-        throw InvalidInput(std::string(name) + " = " + std::to_string(value) + unit + " is outside the allowed range [" +
-                           std::to_string(lo) + ", " + std::to_string(hi) + "]");
-}
 
 void check_positive(const std::string& what, const char* field, float value, bool zero_allowed, const char* unit) {
     if (!std::isfinite(value) || !(zero_allowed ? value >= 0.0f : value > 0.0f))
