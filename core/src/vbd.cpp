@@ -280,6 +280,25 @@ constexpr std::size_t vbd_chunk = 256; ///< vertices per parallel chunk of a col
 /// 50 x 50 level went parallel); with 64-cell chunks (vbd_grid.cpp) 1024 -> 512 27.7-28.2 -> 25.6-25.9 ms (its 25 x 25
 /// level too); 128 the same as 512; N = 316 unchanged by any of them.
 constexpr std::size_t serial_below = 512;
+
+/// One coordinate of the Chebyshev pass over [begin, end): x holds the sweeps' iterate xbar^(k), prev holds x^(k-2)
+/// and receives x^(k) = w (xbar^(k) - x^(k-2)) + x^(k-2) (pinned points, inverse mass 0, keep xbar), which x receives
+/// too. The first pass (first) extrapolates nothing. Branch-free over plain arrays, so it vectorises; the caller
+/// swaps the roles of the x^(k-1) and x^(k-2) arrays afterwards instead of copying them.
+void chebyshev_pass(float* __restrict x, float* __restrict prev, const float* __restrict inv_mass, std::size_t begin,
+                    std::size_t end, float w, bool first) {
+    if (first) {
+        std::copy(x + begin, x + end, prev + begin);
+        return;
+    }
+    for (std::size_t i = begin; i < end; ++i) {
+        const float p = prev[i], xbar = x[i];
+        const float extrapolated = w * (xbar - p) + p;
+        const float v = inv_mass[i] != 0.0f ? extrapolated : xbar;
+        x[i] = v;
+        prev[i] = v;
+    }
+}
 }
 
 Solver::Solver() = default;
@@ -424,10 +443,13 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     const float rho2 = ip.chebyshev_rho * ip.chebyshev_rho;
     const std::size_t blocks = (count + block_particles - 1) / block_particles;
     float omega = 1.0f;
+    // x^(k-1) and x^(k-2) of the Chebyshev pass: two sets of arrays whose roles swap after each pass.
+    float *c1x = cheb1_x_.data(), *c1y = cheb1_y_.data(), *c1z = cheb1_z_.data();
+    float *c2x = cheb2_x_.data(), *c2y = cheb2_y_.data(), *c2z = cheb2_z_.data();
     if (chebyshev) {
-        std::copy_n(x, count, cheb1_x_.data());
-        std::copy_n(y, count, cheb1_y_.data());
-        std::copy_n(z, count, cheb1_z_.data());
+        std::copy_n(x, count, c1x);
+        std::copy_n(y, count, c1y);
+        std::copy_n(z, count, c1z);
     }
     // Contact, vertex by vertex right after its local step (its neighbours then never see it inside a collider):
     // out of every collider from the side the step came from; the normal of the last contact is kept for friction.
@@ -557,26 +579,17 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
             // omega_k = 4 / (4 - rho^2 omega_{k-1}).
             omega = it == 0 ? 1.0f : it == 1 ? 2.0f / (2.0f - rho2) : 4.0f / (4.0f - rho2 * omega);
             const float w = omega;
+            const bool first = it == 0;
             for_each_index<Parallel>(blocks, [&](std::size_t blk) {
                 const std::size_t begin = blk * block_particles, end = std::min(begin + block_particles, count);
-                for (std::size_t i = begin; i < end; ++i) {
-                    float px = x[i], py = y[i], pz = z[i];
-                    if (it > 0 && mass[i] != 0.0f) {
-                        px = w * (px - cheb2_x_[i]) + cheb2_x_[i];
-                        py = w * (py - cheb2_y_[i]) + cheb2_y_[i];
-                        pz = w * (pz - cheb2_z_[i]) + cheb2_z_[i];
-                        x[i] = px;
-                        y[i] = py;
-                        z[i] = pz;
-                    }
-                    cheb2_x_[i] = cheb1_x_[i];
-                    cheb2_y_[i] = cheb1_y_[i];
-                    cheb2_z_[i] = cheb1_z_[i];
-                    cheb1_x_[i] = px;
-                    cheb1_y_[i] = py;
-                    cheb1_z_[i] = pz;
-                }
+                chebyshev_pass(x, c2x, mass, begin, end, w, first);
+                chebyshev_pass(y, c2y, mass, begin, end, w, first);
+                chebyshev_pass(z, c2z, mass, begin, end, w, first);
             });
+            // The arrays just written hold x^(k), the others x^(k-1): they are the next pass's x^(k-1) and x^(k-2).
+            std::swap(c1x, c2x);
+            std::swap(c1y, c2y);
+            std::swap(c1z, c2z);
         }
         if (ip.tolerance > 0.0f && r <= double(ip.tolerance) * stats.first_residual) break;
     }
