@@ -34,6 +34,7 @@
 #include <tbb/parallel_for.h>
 
 #include "drape/simulation.hpp"
+#include "strain_limit_sweep.hpp"
 
 namespace drape {
 
@@ -41,67 +42,6 @@ namespace {
 
 /// Springs per parallel chunk of a colour group (fixed: the partition never depends on the thread count).
 constexpr std::size_t limit_chunk = 4096;
-/// Flags of Simulation::limit_inner_: end a (b) is fewer springs away from the authored pins than the other end; the
-/// spring is a shear spring.
-constexpr std::uint8_t limit_a_inner = 1, limit_b_inner = 2, limit_shear = 4;
-
-struct LimitArgs {
-    float* __restrict x;
-    float* __restrict y;
-    float* __restrict z;
-    float* __restrict u;
-    float* __restrict v;
-    float* __restrict w;
-    const float* __restrict inv_mass;
-    const std::uint32_t* __restrict a;
-    const std::uint32_t* __restrict b;
-    const float* __restrict rest;
-    const std::uint8_t* __restrict inner; ///< null (explicit solver), or per spring limit_inner_'s flags (implicit)
-    bool one_sided;                        ///< with `inner`: move only the far end (not while a grab is held)
-    float stretch;     ///< 1 + ratio
-    float tolerated;   ///< 1 + 1.05 ratio: a spring longer than this before its correction keeps the sweeps going
-    /// Change of u, v, w per unit displacement: Euler (velocity) 1 / (K dt), Verlet (displacement per step) 1 / K.
-    float vel_scale;
-};
-
-/// Returns whether a spring of [begin, end) was longer than the tolerated stretch before its correction.
-bool limit_range(const LimitArgs& c, std::size_t begin, std::size_t end) noexcept {
-    bool over = false;
-    for (std::size_t k = begin; k < end; ++k) {
-        if (c.inner && (c.inner[k] & limit_shear)) continue; // the implicit solver limits no shear spring
-        const std::uint32_t ia = c.a[k], ib = c.b[k];
-        const float dx = c.x[ib] - c.x[ia], dy = c.y[ib] - c.y[ia], dz = c.z[ib] - c.z[ia];
-        const float l2 = dx * dx + dy * dy + dz * dz;
-        const float l_max = c.stretch * c.rest[k];
-        if (!(l2 > l_max * l_max)) continue;
-        const float l_tol = c.tolerated * c.rest[k];
-        over = over || l2 > l_tol * l_tol;
-        float wa = c.inv_mass[ia], wb = c.inv_mass[ib];
-        if (c.one_sided) { // the end nearer the fixed particles stays (unless the far end cannot move)
-            if ((c.inner[k] & limit_a_inner) && wb != 0.0f) wa = 0.0f;
-            if ((c.inner[k] & limit_b_inner) && wa != 0.0f) wb = 0.0f;
-        }
-        const float wsum = wa + wb;
-        if (wsum == 0.0f) continue;
-        const float l = std::sqrt(l2);
-        const float e = (l - l_max) / (l * wsum);
-        const float ea = wa * e, eb = wb * e;
-        c.x[ia] += ea * dx;
-        c.y[ia] += ea * dy;
-        c.z[ia] += ea * dz;
-        c.x[ib] -= eb * dx;
-        c.y[ib] -= eb * dy;
-        c.z[ib] -= eb * dz;
-        const float va = ea * c.vel_scale, vb = eb * c.vel_scale;
-        c.u[ia] += va * dx;
-        c.v[ia] += va * dy;
-        c.w[ia] += va * dz;
-        c.u[ib] -= vb * dx;
-        c.v[ib] -= vb * dy;
-        c.w[ib] -= vb * dz;
-    }
-    return over;
-}
 
 } // namespace
 
@@ -144,18 +84,42 @@ void Simulation::cook_strain_limit() {
     limit_groups_ = ColourGroups{};
     limit_groups_.group_offsets.push_back(0);
     limit_serial_.clear();
+    limit_shear_begin_.clear();
     for (std::size_t begin = 0; begin < limited.size();) {
         std::size_t end = begin;
         while (end < limited.size() && spring_level(limited[end]) == spring_level(limited[begin])) ++end;
         const ColourGroups g = colour_edges(cloth_.edges, n, std::span(limited).subspan(begin, end - begin));
         for (std::size_t k = 0; k < g.group_count(); ++k) {
-            for (std::uint32_t e : g.group(k)) limit_groups_.edge_index.push_back(e);
+            // Shear springs last (no two springs of a colour group share a particle, so the order within one does
+            // not change the result; an overflow group keeps its order by running whole in either form).
+            const auto shear = [&](std::uint32_t e) { return cloth_.edges[e].kind == SpringKind::shear; };
+            for (std::uint32_t e : g.group(k))
+                if (g.is_overflow(k) || !shear(e)) limit_groups_.edge_index.push_back(e);
+            limit_shear_begin_.push_back(static_cast<std::uint32_t>(limit_groups_.edge_index.size()));
+            if (!g.is_overflow(k))
+                for (std::uint32_t e : g.group(k))
+                    if (shear(e)) limit_groups_.edge_index.push_back(e);
             limit_groups_.group_offsets.push_back(static_cast<std::uint32_t>(limit_groups_.edge_index.size()));
             limit_serial_.push_back(g.is_overflow(k) ? 1 : 0);
         }
         begin = end;
     }
     limit_groups_.colour_count = static_cast<std::uint32_t>(limit_serial_.size());
+    // Per particle, the groups holding one of its springs (each once, ascending).
+    limit_particle_group_offsets_.assign(n + 1, 0);
+    limit_particle_groups_.clear();
+    {
+        std::vector<std::vector<std::uint32_t>> groups_of(n);
+        for (std::uint32_t g = 0; g < limit_groups_.group_count(); ++g)
+            for (std::uint32_t e : limit_groups_.group(g))
+                for (std::uint32_t i : {cloth_.edges[e].a, cloth_.edges[e].b})
+                    if (groups_of[i].empty() || groups_of[i].back() != g) groups_of[i].push_back(g);
+        for (std::size_t i = 0; i < n; ++i) {
+            limit_particle_groups_.insert(limit_particle_groups_.end(), groups_of[i].begin(), groups_of[i].end());
+            limit_particle_group_offsets_[i + 1] = static_cast<std::uint32_t>(limit_particle_groups_.size());
+        }
+    }
+    limit_group_moved_.assign(limit_groups_.group_count(), 0);
 
     const std::size_t count = limit_groups_.edge_index.size();
     limit_a_.resize(count);
@@ -166,7 +130,7 @@ void Simulation::cook_strain_limit() {
         const Edge& e = cloth_.edges[limit_groups_.edge_index[k]];
         limit_a_[k] = e.a;
         limit_b_[k] = e.b;
-        limit_inner_[k] = e.kind == SpringKind::shear ? limit_shear : 0;
+        limit_inner_[k] = e.kind == SpringKind::shear ? strain_limit::shear : 0;
         limit_rest_[k] = edge_rest_.empty() ? e.rest : edge_rest_[limit_groups_.edge_index[k]];
         if (e.kind == SpringKind::seam) {
             limit_seam_slot_.push_back(static_cast<std::uint32_t>(k));
@@ -199,8 +163,9 @@ void Simulation::update_limit_levels() noexcept {
     limit_levels(cloth_.inv_mass.data()); // every particle fixed now: authored pins, user pins, the grab
     for (std::size_t k = 0; k < limit_a_.size(); ++k) {
         const std::uint32_t la = limit_level_[limit_a_[k]], lb = limit_level_[limit_b_[k]];
-        limit_inner_[k] = static_cast<std::uint8_t>((limit_inner_[k] & limit_shear) | (la < lb ? limit_a_inner : 0) |
-                                                    (lb < la ? limit_b_inner : 0));
+        limit_inner_[k] = static_cast<std::uint8_t>((limit_inner_[k] & strain_limit::shear) |
+                                                    (la < lb ? strain_limit::a_inner : 0) |
+                                                    (lb < la ? strain_limit::b_inner : 0));
     }
 }
 
@@ -212,25 +177,48 @@ template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, b
     // spring next to the grab; the mass-weighted form without shear springs and velocities let the stretch creep up
     // over 20 steps of the NoAllocation grab at N = 48; the full explicit form holds there, as it always did).
     const bool frame_form = strain_limit_frame_form();
-    LimitArgs c{out.x.data(), out.y.data(), out.z.data(), out.u.data(), out.v.data(), out.w.data(),
-                cloth_.inv_mass.data(), limit_a_.data(), limit_b_.data(), limit_rest_.data(),
-                frame_form ? limit_inner_.data() : nullptr, frame_form, 1.0f + sl.ratio, 1.0f + 1.05f * sl.ratio,
-                frame_form ? 0.0f
-                : params_.integrator == Integrator::symplectic_euler ? 1.0f / (float(sl.every) * params_.dt)
-                                                                     : 1.0f / float(sl.every)};
+    const strain_limit::Args c{out.x.data(),
+                               out.y.data(),
+                               out.z.data(),
+                               out.u.data(),
+                               out.v.data(),
+                               out.w.data(),
+                               cloth_.inv_mass.data(),
+                               limit_a_.data(),
+                               limit_b_.data(),
+                               limit_rest_.data(),
+                               frame_form ? limit_inner_.data() : nullptr,
+                               1.0f + sl.ratio,
+                               1.0f + 1.05f * sl.ratio,
+                               frame_form                                        ? 0.0f
+                               : params_.integrator == Integrator::symplectic_euler ? 1.0f / (float(sl.every) * params_.dt)
+                                                                                    : 1.0f / float(sl.every),
+                               limit_particle_group_offsets_.data(),
+                               limit_particle_groups_.data(),
+                               limit_group_moved_.data()};
+    const std::size_t groups = limit_groups_.group_count();
     // At least `passes` sweeps; more (up to strain_limit_max_passes) while a sweep still found a spring over
     // 1.05 x the limit, so a limit that can hold does (the JSON of `drape run` reports what was honoured).
     for (std::uint32_t pass = 0; pass < strain_limit_max_passes; ++pass) {
         std::atomic<bool> over{false}; // an OR: the same whatever the order of the chunks
-        for (std::size_t g = 0; g < limit_groups_.group_count(); ++g) {
-            const std::size_t begin = limit_groups_.group_offsets[g], end = limit_groups_.group_offsets[g + 1];
+        for (std::size_t g = 0; g < groups; ++g) {
+            const std::uint64_t seq = ++limit_seq_;
+            const std::size_t begin = limit_groups_.group_offsets[g];
+            const std::size_t end = frame_form ? limit_shear_begin_[g] : limit_groups_.group_offsets[g + 1];
+            if (begin == end) continue;
+            // Nothing in the group moved since this group's sweep one pass ago (the collider pass, run between
+            // sweeps, moves particles without stamps): its springs are as that sweep left them, none over the limit.
+            if (pass > 0 && !with_collide && limit_group_moved_[g] < seq - groups) continue;
             const std::size_t chunks = (end - begin + limit_chunk - 1) / limit_chunk;
-            if (Parallel && !limit_serial_[g] && chunks > 1) {
+            if (limit_serial_[g]) { // the overflow group: its springs may share particles, so in order
+                if (strain_limit::sweep(c, begin, end, seq)) over.store(true, std::memory_order_relaxed);
+            } else if (Parallel && chunks > 1) {
                 tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t ch) {
-                    if (limit_range(c, begin + ch * limit_chunk, std::min(end, begin + (ch + 1) * limit_chunk)))
+                    if (strain_limit::sweep(c, begin + ch * limit_chunk, std::min(end, begin + (ch + 1) * limit_chunk),
+                                            seq))
                         over.store(true, std::memory_order_relaxed);
                 });
-            } else if (limit_range(c, begin, end)) { // small group, serial twin, or the overflow group
+            } else if (strain_limit::sweep(c, begin, end, seq)) { // a small group, or the serial twin
                 over.store(true, std::memory_order_relaxed);
             }
         }

@@ -320,6 +320,15 @@ class Simulation {
     // spring ends and rest lengths copied in group order for linear sweeps.
     ColourGroups limit_groups_;
     std::vector<std::uint8_t> limit_serial_; ///< per group: 1 = overflow group, run serially
+    /// Per group, where its shear springs begin (each group holds its other springs first): the frame form, which
+    /// limits no shear spring, runs only the part before.
+    std::vector<std::uint32_t> limit_shear_begin_;
+    /// Which sweeps may skip a group (strain_limit_sweep.hpp): per particle the groups holding one of its springs
+    /// (CSR), per group the sequence number of the last correction that moved one of its particles, and the running
+    /// sequence number (one per group visited).
+    std::vector<std::uint32_t> limit_particle_group_offsets_, limit_particle_groups_;
+    std::vector<std::uint64_t> limit_group_moved_;
+    std::uint64_t limit_seq_ = 0;
     std::vector<std::uint32_t> limit_a_, limit_b_;
     /// The strain limit's form for frame-long steps (implicit solver, no grab held; strain_limit.cpp) and the springs
     /// it acts on: structural and seam springs always, shear springs only in the explicit solver's form. The limit

@@ -1,0 +1,110 @@
+// One sweep of Provot strain limiting over a range of springs (core/src/strain_limit.cpp runs it group by group), and
+// the bookkeeping that lets later sweeps skip the groups in which nothing moved: each correction stamps the groups of
+// its two particles with the sweep's running sequence number, and a group whose stamp is older than its own last
+// visit holds the same positions it was checked at, so none of its springs can be over the limit.
+#pragma once
+
+#include <atomic>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+namespace drape::strain_limit {
+
+/// Flags of Simulation::limit_inner_: end a (b) is fewer springs away from the authored pins than the other end; the
+/// spring is a shear spring.
+inline constexpr std::uint8_t a_inner = 1, b_inner = 2, shear = 4;
+
+struct Args {
+    float* __restrict x;
+    float* __restrict y;
+    float* __restrict z;
+    float* __restrict u;
+    float* __restrict v;
+    float* __restrict w;
+    const float* __restrict inv_mass;
+    const std::uint32_t* __restrict a;
+    const std::uint32_t* __restrict b;
+    const float* __restrict rest;
+    /// Per spring limit_inner_'s flags for the frame form (one-sided: only the far end moves; no shear spring;
+    /// positions only), or null for the explicit solver's form (also while a grab is held).
+    const std::uint8_t* __restrict inner;
+    float stretch;   ///< 1 + ratio
+    float tolerated; ///< 1 + 1.05 ratio: a spring longer than this before its correction keeps the sweeps going
+    /// Change of u, v, w per unit displacement: Euler (velocity) 1 / (K dt), Verlet (displacement per step) 1 / K.
+    float vel_scale;
+    /// Per particle (CSR), the colour groups holding one of its springs; per group the sequence number of the last
+    /// correction that moved one of its particles.
+    const std::uint32_t* __restrict particle_group_offsets;
+    const std::uint32_t* __restrict particle_groups;
+    std::uint64_t* group_moved;
+};
+
+/// Spring k: d = x_b - x_a, l = |d|; over l_max = stretch rest its ends move toward each other by the excess, shared
+/// by inverse mass (x_a += w_a e d, x_b -= w_b e d, e = (l - l_max) / (l (w_a + w_b))). Returns `over` if it was
+/// longer than the tolerated stretch, plus `moved` if its ends were moved. Frame: the implicit solver's form
+/// (c.inner set), else the explicit solver's.
+inline constexpr unsigned over = 1, moved = 2;
+template <bool Frame> inline unsigned limit_spring(const Args& c, std::size_t k) noexcept {
+    if (Frame && (c.inner[k] & shear)) return 0; // the implicit solver limits no shear spring
+    const std::uint32_t ia = c.a[k], ib = c.b[k];
+    const float dx = c.x[ib] - c.x[ia], dy = c.y[ib] - c.y[ia], dz = c.z[ib] - c.z[ia];
+    const float l2 = dx * dx + dy * dy + dz * dz;
+    const float l_max = c.stretch * c.rest[k];
+    if (!(l2 > l_max * l_max)) return 0;
+    const float l_tol = c.tolerated * c.rest[k];
+    const unsigned is_over = l2 > l_tol * l_tol ? over : 0;
+    float wa = c.inv_mass[ia], wb = c.inv_mass[ib];
+    if (Frame) { // the end nearer the fixed particles stays (unless the far end cannot move)
+        if ((c.inner[k] & a_inner) && wb != 0.0f) wa = 0.0f;
+        if ((c.inner[k] & b_inner) && wa != 0.0f) wb = 0.0f;
+    }
+    const float wsum = wa + wb;
+    if (wsum == 0.0f) return is_over;
+    const float l = std::sqrt(l2);
+    const float e = (l - l_max) / (l * wsum);
+    const float ea = wa * e, eb = wb * e;
+    c.x[ia] += ea * dx;
+    c.y[ia] += ea * dy;
+    c.z[ia] += ea * dz;
+    c.x[ib] -= eb * dx;
+    c.y[ib] -= eb * dy;
+    c.z[ib] -= eb * dz;
+    if (Frame) return is_over | moved; // positions only: the step's velocities were set before the limit
+    const float va = ea * c.vel_scale, vb = eb * c.vel_scale;
+    c.u[ia] += va * dx;
+    c.v[ia] += va * dy;
+    c.w[ia] += va * dz;
+    c.u[ib] -= vb * dx;
+    c.v[ib] -= vb * dy;
+    c.w[ib] -= vb * dz;
+    return is_over | moved;
+}
+
+/// Stamps every group holding a spring of particle i with seq. Chunks of one group run in parallel and all store
+/// the same seq, hence the relaxed atomic stores.
+inline void mark_moved(const Args& c, std::uint32_t i, std::uint64_t seq) noexcept {
+    for (std::uint32_t k = c.particle_group_offsets[i]; k < c.particle_group_offsets[i + 1]; ++k)
+        std::atomic_ref<std::uint64_t>(c.group_moved[c.particle_groups[k]]).store(seq, std::memory_order_relaxed);
+}
+
+/// Springs begin..end-1 in order, the sweep at sequence number seq. Returns whether one was longer than the
+/// tolerated stretch before its correction.
+template <bool Frame> inline bool sweep(const Args& c, std::size_t begin, std::size_t end, std::uint64_t seq) noexcept {
+    unsigned any = 0;
+    for (std::size_t k = begin; k < end; ++k) {
+        const unsigned r = limit_spring<Frame>(c, k);
+        if (r & moved) {
+            mark_moved(c, c.a[k], seq);
+            mark_moved(c, c.b[k], seq);
+        }
+        any |= r;
+    }
+    return (any & over) != 0;
+}
+
+inline bool sweep(const Args& c, std::size_t begin, std::size_t end, std::uint64_t seq) noexcept {
+    return c.inner ? sweep<true>(c, begin, end, seq) : sweep<false>(c, begin, end, seq);
+}
+
+} // namespace drape::strain_limit
