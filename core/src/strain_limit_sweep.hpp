@@ -64,20 +64,18 @@ template <bool Frame> inline unsigned limit_spring(const Args& c, std::size_t k)
     const float l = std::sqrt(l2);
     const float e = (l - l_max) / (l * wsum);
     const float ea = wa * e, eb = wb * e;
-    c.x[ia] += ea * dx;
-    c.y[ia] += ea * dy;
-    c.z[ia] += ea * dz;
-    c.x[ib] -= eb * dx;
-    c.y[ib] -= eb * dy;
-    c.z[ib] -= eb * dz;
+    // Moves a's entry of (px, py, pz) by sa d and b's by -sb d: the positions, then (explicit form) the velocities.
+    const auto toward = [&](float* px, float* py, float* pz, float sa, float sb) {
+        px[ia] += sa * dx;
+        py[ia] += sa * dy;
+        pz[ia] += sa * dz;
+        px[ib] -= sb * dx;
+        py[ib] -= sb * dy;
+        pz[ib] -= sb * dz;
+    };
+    toward(c.x, c.y, c.z, ea, eb);
     if (Frame) return is_over | moved; // positions only: the step's velocities were set before the limit
-    const float va = ea * c.vel_scale, vb = eb * c.vel_scale;
-    c.u[ia] += va * dx;
-    c.v[ia] += va * dy;
-    c.w[ia] += va * dz;
-    c.u[ib] -= vb * dx;
-    c.v[ib] -= vb * dy;
-    c.w[ib] -= vb * dz;
+    toward(c.u, c.v, c.w, ea * c.vel_scale, eb * c.vel_scale);
     return is_over | moved;
 }
 
