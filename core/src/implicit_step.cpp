@@ -48,6 +48,14 @@ namespace {
 /// and 60 gave 3.09e-3; at N = 100, 1.21e-2 / 1.25e-2 / 1.67e-2 / 2.96e-2 (docs/implicit.md, "Coarse sweeps").
 constexpr std::uint32_t coarse_iterations_max = 240;
 
+/// What a sweep of a small coarse level costs beyond its particles, in particles: its colours' SIMD batches are
+/// mostly empty and each sweep has fixed passes. Measured (2-core AMD EPYC with AVX-512, one thread, the N = 100 wool
+/// hang at 10 sweeps, 60 steps, two runs): 37-41 ns per particle and sweep on the 50 x 50 and 25 x 25 levels, 74-76
+/// ns on the 13 x 13 and 145-154 ns on the 7 x 7: some 5-6 us per sweep on top of ~38 ns per particle. Costed
+/// without it, the 13 x 13 and 7 x 7 levels ran 80 and 160 sweeps (now 62 and 79) and took a quarter of the step
+/// (docs/implicit.md, "Small coarse levels costed by their sweeps").
+constexpr double sweep_floor_particles = 150.0;
+
 /// A coarser copy is kept only if it has at most this share of the next finer one's particles (a cloth whose
 /// rebuild hardly thins it, such as an outline already at its outline's own sampling, stops there) and at least
 /// coarsest_particles.
@@ -118,10 +126,13 @@ void Simulation::cook_implicit() {
                 copy->from_fine.size() != count || copy->to_finer.size() != finer_count)
                 break;
             CoarseLevel level;
-            // Twice the sweeps of the next finer level where it has at most a third of that one's particles (a grid's
+            // Twice the sweeps of the next finer level where its sweep costs at most a third of that one's (a grid's
             // quarter: twice the sweeps cost half as much), else the square root of the ratio (an outline's levels
-            // thin less: its outline's own points stay), so that no level costs more than the next finer one.
-            const double ratio = double(finer_count) / double(count);
+            // thin less: its outline's own points stay), so that no level costs more than the next finer one. From
+            // the second coarse level on, a sweep is costed as sweep_floor_particles more particles than the level
+            // has; the first keeps twice the cloth's sweeps whatever its size (it carries the cloth's smooth error).
+            const double floor = solver->coarse.empty() ? 0.0 : sweep_floor_particles;
+            const double ratio = (double(finer_count) + floor) / (double(count) + floor);
             level.sweep_factor =
                 std::min(256.0, (solver->coarse.empty() ? 1.0 : solver->coarse.back().sweep_factor) *
                                     (ratio >= 3.0 ? 2.0 : std::sqrt(ratio)));
