@@ -89,26 +89,33 @@ std::unique_ptr<GridLayout> GridLayout::cook(const VbdGraph& g, std::uint32_t ro
     }
     if (period == 0) return nullptr;
     L->period_ = period;
+    L->columns_ = columns;
     L->particles_ = n;
     L->sub_rows_ = (rows + period - 1) / period;
     L->sub_columns_ = (columns + period - 1) / period;
-    constexpr std::uint32_t W = simd::width;
-    static_assert(halo_columns >= W && halo_columns % W == 0, "rows stay aligned; the +-1 column shift stays inside");
-    L->stride_ = halo_columns + (L->sub_columns_ + W - 1) / W * W + halo_columns;
-    L->cells_ = std::size_t(period) * period * (L->sub_rows_ + 2) * L->stride_;
-    const std::size_t row_cells = (L->sub_columns_ + W - 1) / W * W;
-    // Chunks of about 64 cells (whole sub-grid rows): a coarse level's colour then still splits into several chunks.
-    // Against 256 (2-core AVX2 machine, drape_implicit throughput, 2 threads, alternating builds): N = 316 per
-    // iteration 6.50 / 6.57 -> 6.06 / 6.02 ms, N = 100 1.08 / 1.09 -> 1.05 / 1.06 ms; 16 cells: no better than 64.
-    L->rows_per_chunk_ = std::max<std::size_t>(1, 64 / row_cells);
-    L->chunks_ = (L->sub_rows_ + L->rows_per_chunk_ - 1) / L->rows_per_chunk_;
+    constexpr std::size_t W = simd::width;
+    auto round_up = [](std::size_t v) { return (v + W - 1) / W * W; };
+    L->stride_ = L->sub_columns_ + 1;
+    const std::size_t stride = L->stride_, span = std::size_t(L->sub_rows_) * stride - 1; // first to last cell
+    L->batches_ = (span + W - 1) / W;
+    // Halo lanes load neighbours up to stride + 1 cells before the first cell and after the last batch; a class's
+    // halo (row -1 ... row sub_rows) and its batches stay clear of the next class's.
+    L->front_ = round_up(stride + 1);
+    L->region_ = round_up((std::size_t(L->sub_rows_) + 2) * stride + W);
+    L->cells_ = L->front_ + std::size_t(period) * period * L->region_;
+    // Chunks of about 64 cells: a coarse level's colour then still splits into several chunks. Against 256
+    // (2-core AVX2 machine, drape_implicit throughput, 2 threads, alternating builds): N = 316 per iteration
+    // 6.50 / 6.57 -> 6.06 / 6.02 ms, N = 100 1.08 / 1.09 -> 1.05 / 1.06 ms; 16 cells: no better than 64.
+    L->batches_per_chunk_ = std::max<std::size_t>(1, 64 / W);
+    L->chunks_ = (L->batches_ + L->batches_per_chunk_ - 1) / L->batches_per_chunk_;
 
     L->cell_of_.resize(n);
     L->particle_.reset(L->cells_);
     std::fill_n(L->particle_.data(), L->cells_, UINT32_MAX);
     for (std::size_t i = 0; i < n; ++i) {
         const std::uint32_t r = std::uint32_t(i / columns), c = std::uint32_t(i % columns);
-        const std::size_t cell = L->cell((r % period) * period + c % period, r / period, c / period);
+        const std::size_t cell =
+            L->cell((r % period) * period + c % period, std::int32_t(r / period), std::int32_t(c / period));
         L->cell_of_[i] = std::uint32_t(cell);
         L->particle_[cell] = std::uint32_t(i);
     }
@@ -123,7 +130,7 @@ std::unique_ptr<GridLayout> GridLayout::cook(const VbdGraph& g, std::uint32_t ro
                     const std::uint32_t to = std::uint32_t((ar - fa * P) * P + (bc - fb * P));
                     // Cell of (p, q) in class (a, b) and of (p + fa, q + fb) in class `to`, both at p = q = 1.
                     const std::int64_t own = std::int64_t(L->cell(std::uint32_t(a * P + b), 1, 1));
-                    const std::int64_t other = std::int64_t(L->cell(to, std::uint32_t(1 + fa), std::uint32_t(1 + fb)));
+                    const std::int64_t other = std::int64_t(L->cell(to, 1 + fa, 1 + fb));
                     out[std::size_t(a * P + b) * dirs.size() + s] = std::int32_t(other - own);
                 }
     };
@@ -148,7 +155,7 @@ void GridLayout::refresh(const VbdGraph& g) {
     std::fill_n(diag_.data(), cells_, 0.0f);
     for (std::size_t i = 0; i < n; ++i) {
         const std::size_t c = cell_of_[i];
-        const std::size_t cls = (c / stride_) % (std::size_t(period_) * period_);
+        const std::size_t cls = class_of(i);
         for (std::uint32_t e = g.spring_offsets[i], s = 0; e < g.spring_offsets[i + 1]; ++e) {
             // The entry's slot: the one whose delta reaches its neighbour's cell (distinct neighbours, distinct
             // cells; cook checked that rows run in ascending slot order).
@@ -171,7 +178,7 @@ void GridLayout::refresh(const VbdGraph& g) {
 void GridLayout::refresh_rest(const VbdGraph& g) {
     for (std::size_t i = 0; i < particles_; ++i) {
         const std::size_t c = cell_of_[i];
-        const std::size_t cls = (c / stride_) % (std::size_t(period_) * period_);
+        const std::size_t cls = class_of(i);
         for (std::uint32_t e = g.spring_offsets[i], s = 0; e < g.spring_offsets[i + 1]; ++e) {
             const std::int64_t d = std::int64_t(cell_of_[g.spring_neighbour[e]]) - std::int64_t(c);
             while (spring_delta_[cls * spring_dir_.size() + s] != d) ++s; // the entry's slot, as in refresh

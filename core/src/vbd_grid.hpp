@@ -8,10 +8,13 @@
 // classes (a, b). Class (a, b) holds the vertices (a + P p, b + P q) at sub-grid row p and column q. The neighbour of
 // (a + P p, b + P q) at (dr, dc) is in class ((a + dr) mod P, (b + dc) mod P) at (p + floor((a + dr) / P),
 // q + floor((b + dc) / P)), a shift of -1, 0 or +1: one constant index offset per class and direction ("delta").
-// Memory holds sub-grid row p of every class together (row-major over (p, class, q)), so that a batch's neighbours in
-// all directions lie within three such row groups: (sub_rows + 2) row groups of P^2 rows of `stride` floats, with a
-// row group and 16 columns of zero halo round the cells; cells outside the cloth hold zero mass (never written) and
-// zero coefficients (they add exactly nothing).
+// Memory holds each class's sub-grid by itself, row-major with a stride of sub_columns + 1: the one extra column is
+// the zero halo on both sides of a row (column -1 of row p is column sub_columns of row p - 1), and a halo row lies
+// above and below. A class's first cell is simd::width-aligned and its batches run through its cells as one
+// sequence, across row ends, so the lanes wasted on halo are one per row (before 2026-11-28 every row was padded to
+// whole batches with 16 halo columns: 71 % of the lanes of N = 100's finest level did work, 19 % of its 7 x 7 level;
+// now 96 % and 56 %). Cells outside the cloth hold zero mass (never written) and zero coefficients (they add exactly
+// nothing); a halo lane's neighbour loads land on finite cells of the allocation and its results are dropped.
 #pragma once
 
 #include <array>
@@ -58,8 +61,8 @@ class GridLayout {
     float* z() noexcept { return z_.data(); }
     const float* inv_mass() const noexcept { return inv_mass_.data(); }
 
-    /// Solves chunk `chunk` of colour `colour` (whole sub-grid rows; fixed, so the chunks' residuals are the same
-    /// for any thread count): each movable vertex's new position goes into the packed iterate, through `keep_out`
+    /// Solves chunk `chunk` of colour `colour` (a fixed run of batches, so the chunks' residuals are the same for any
+    /// thread count): each movable vertex's new position goes into the packed iterate, through `keep_out`
     /// when there are colliders (keep_out(particle, float[3])). Returns the chunk's sum of |g|^2 in lane order.
     template <class KeepOut>
     double solve_chunk(const SweepArgs& packed, std::size_t colour, std::size_t chunk, bool contact,
@@ -67,10 +70,16 @@ class GridLayout {
 
   private:
     friend struct GridSource;
-    std::size_t cell(std::uint32_t cls, std::uint32_t p, std::uint32_t q) const noexcept {
-        return ((std::size_t(p) + 1) * period_ * period_ + cls) * stride_ + halo_columns + q;
+    /// Sub-grid row p (-1 ... sub_rows) and column q (-1 ... sub_columns) of class cls; row -1 and column -1 index
+    /// backwards from the class's first cell.
+    std::size_t cell(std::uint32_t cls, std::int32_t p, std::int32_t q) const noexcept {
+        return std::size_t(std::ptrdiff_t(class_base(cls)) + std::ptrdiff_t(p) * stride_ + q);
     }
-    static constexpr std::uint32_t halo_columns = 16;
+    std::size_t class_base(std::uint32_t cls) const noexcept { return front_ + std::size_t(cls) * region_; }
+    /// The class a * P + b of particle i (row i / columns, column i % columns).
+    std::size_t class_of(std::size_t i) const noexcept {
+        return (i / columns_ % period_) * period_ + i % columns_ % period_;
+    }
     /// Coefficients are stored batch by batch: the simd::width cells of a batch, slot after slot, so that one batch
     /// reads one contiguous block (one memory stream, not one per slot).
     std::size_t spring_at(std::size_t cell, std::size_t slot) const noexcept {
@@ -80,8 +89,10 @@ class GridLayout {
         return (cell - cell % simd::width) * bend_dir_.size() + slot * simd::width + cell % simd::width;
     }
 
-    std::uint32_t period_ = 0, sub_rows_ = 0, sub_columns_ = 0, stride_ = 0;
-    std::size_t cells_ = 0, rows_per_chunk_ = 1, chunks_ = 0, particles_ = 0;
+    std::uint32_t period_ = 0, columns_ = 0, sub_rows_ = 0, sub_columns_ = 0, stride_ = 0;
+    std::size_t front_ = 0;  ///< cells before class 0's first cell (its halo, and halo lanes' loads)
+    std::size_t region_ = 0; ///< cells from one class's first cell to the next one's (a multiple of simd::width)
+    std::size_t cells_ = 0, batches_ = 0, batches_per_chunk_ = 1, chunks_ = 0, particles_ = 0;
     std::vector<std::array<std::int32_t, 2>> spring_dir_, bend_dir_; ///< slot -> (dr, dc), ascending
     std::vector<std::uint32_t> cell_of_;           ///< per particle: its cell
     AlignedArray<std::uint32_t> particle_;         ///< per cell: its particle (UINT32_MAX outside the cloth)
@@ -130,38 +141,37 @@ double GridLayout::solve_chunk(const SweepArgs& a, std::size_t colour, std::size
     const std::uint32_t cls = colour_class_[colour];
     const std::int32_t* sd = spring_delta_.data() + std::size_t(cls) * spring_dir_.size();
     const std::int32_t* bd = bend_delta_.data() + std::size_t(cls) * bend_dir_.size();
-    const std::size_t p0 = chunk * rows_per_chunk_, p1 = std::min<std::size_t>(sub_rows_, p0 + rows_per_chunk_);
+    const std::size_t b0 = chunk * batches_per_chunk_, b1 = std::min(batches_, b0 + batches_per_chunk_);
     double r = 0.0;
     alignas(64) float g2[W];
-    for (std::size_t p = p0; p < p1; ++p)
-        for (std::uint32_t q = 0; q < sub_columns_; q += W) {
-            const std::size_t o = cell(cls, std::uint32_t(p), q);
-            simd::fbatch ox, oy, oz, og;
-            solve_lanes(GridSource{*this, o, sd, bd}, a, ox, oy, oz, og);
-            simd::store(g2, og);
-            const simd::fbatch w = simd::load(inv_mass_.data() + o);
-            for (std::size_t lane = 0; lane < W; ++lane)
-                if (inv_mass_[o + lane] != 0.0f) r += g2[lane];
-            if (!contact) {
-                const simd::fmask movable = w != simd::fbatch(0.0f);
-                simd::store(x_.data() + o, simd::select(movable, ox, simd::load(x_.data() + o)));
-                simd::store(y_.data() + o, simd::select(movable, oy, simd::load(y_.data() + o)));
-                simd::store(z_.data() + o, simd::select(movable, oz, simd::load(z_.data() + o)));
-                continue;
-            }
-            alignas(64) float lx[W], ly[W], lz[W];
-            simd::store(lx, ox);
-            simd::store(ly, oy);
-            simd::store(lz, oz);
-            for (std::size_t lane = 0; lane < W; ++lane) {
-                if (inv_mass_[o + lane] == 0.0f) continue;
-                float out[3] = {lx[lane], ly[lane], lz[lane]};
-                keep_out(particle_[o + lane], out);
-                x_[o + lane] = out[0];
-                y_[o + lane] = out[1];
-                z_[o + lane] = out[2];
-            }
+    for (std::size_t b = b0; b < b1; ++b) {
+        const std::size_t o = class_base(cls) + b * W;
+        simd::fbatch ox, oy, oz, og;
+        solve_lanes(GridSource{*this, o, sd, bd}, a, ox, oy, oz, og);
+        simd::store(g2, og);
+        const simd::fbatch w = simd::load(inv_mass_.data() + o);
+        for (std::size_t lane = 0; lane < W; ++lane)
+            if (inv_mass_[o + lane] != 0.0f) r += g2[lane];
+        if (!contact) {
+            const simd::fmask movable = w != simd::fbatch(0.0f);
+            simd::store(x_.data() + o, simd::select(movable, ox, simd::load(x_.data() + o)));
+            simd::store(y_.data() + o, simd::select(movable, oy, simd::load(y_.data() + o)));
+            simd::store(z_.data() + o, simd::select(movable, oz, simd::load(z_.data() + o)));
+            continue;
         }
+        alignas(64) float lx[W], ly[W], lz[W];
+        simd::store(lx, ox);
+        simd::store(ly, oy);
+        simd::store(lz, oz);
+        for (std::size_t lane = 0; lane < W; ++lane) {
+            if (inv_mass_[o + lane] == 0.0f) continue;
+            float out[3] = {lx[lane], ly[lane], lz[lane]};
+            keep_out(particle_[o + lane], out);
+            x_[o + lane] = out[0];
+            y_[o + lane] = out[1];
+            z_[o + lane] = out[2];
+        }
+    }
     return r;
 }
 
