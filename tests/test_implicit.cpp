@@ -752,6 +752,45 @@ TEST(Implicit, MultilevelGuessCanBeSwitchedOff) {
     EXPECT_NE(on.checksum(), single) << "the coarse levels change the steps";
 }
 
+// The multilevel guess's sweep plan (cook_implicit): the first coarse level runs twice the cloth's sweeps; from the
+// second on a level runs more sweeps than the next finer one, but no level costs more, a sweep costed as the level's
+// particles plus 150 (sweep_floor_particles); so the small levels of the N = 100 hang (169 and 49 particles) run fewer
+// than the doubling's 80 and 160 (docs/implicit.md, "Small coarse levels costed by their sweeps").
+TEST(Implicit, CoarseLevelsRunNoCostlierSweepsThanTheNextFinerOne) {
+    SceneSpec spec = load_scene("hang");
+    spec.grid.n = 100;
+    spec.physics.solver = Solver::implicit;
+    spec.physics.implicit.iterations = 10;
+    SceneSpec explicit_spec = spec;
+    explicit_spec.physics.solver = Solver::explicit_euler;
+    BuiltScene e = build_scene(explicit_spec);
+    EXPECT_TRUE(Simulation(std::move(e.cloth), e.initial, e.params).implicit_level_plan().empty());
+    BuiltScene b = build_scene(spec);
+    Simulation sim(std::move(b.cloth), b.initial, b.params);
+    sim.step(1);
+    const std::vector<ImplicitLevelPlan> plan = sim.implicit_level_plan();
+    ASSERT_EQ(plan.size(), sim.implicit_levels());
+    ASSERT_GE(plan.size(), 5u);
+    EXPECT_EQ(plan[0].particles, 10000u);
+    EXPECT_EQ(plan[0].sweeps, 10u);
+    EXPECT_EQ(plan[1].sweeps, 20u);
+    for (std::size_t l = 2; l < plan.size(); ++l) {
+        SCOPED_TRACE(l);
+        EXPECT_LT(plan[l].particles, plan[l - 1].particles);
+        EXPECT_GT(plan[l].sweeps, plan[l - 1].sweeps);
+        EXPECT_LE(plan[l].sweeps, 2 * plan[l - 1].sweeps);
+        // Rounded sweeps: within one sweep of the finer level's cost.
+        EXPECT_LE(double(plan[l].particles + 150) * (plan[l].sweeps - 1),
+                  double(plan[l - 1].particles + 150) * plan[l - 1].sweeps);
+    }
+    EXPECT_LT(plan.back().sweeps, 10u << (plan.size() - 1)) << "the smallest level is costed by its sweeps";
+    SimulationParams p = sim.params();
+    p.implicit.multilevel = false;
+    sim.set_params(p);
+    sim.step(1);
+    EXPECT_EQ(sim.implicit_level_plan().size(), 1u);
+}
+
 // What --single-level is for (docs/implicit.md, "Folded and crumpled cloth on a collider"): a 24 x 24 wool cloth
 // folded in half over itself on the ground (the top half one spacing above the bottom, shifted by 0.3 spacing and
 // waved), h = 1/240 s, 30 sweeps. The exact Newton step from this start moves no particle faster than 0.995 m/s;

@@ -88,6 +88,10 @@ int cmd_realtime(const Options& opt) {
                       implicit_params(scene.params, opt.dt, opt.iterations, opt.rho, ImplicitMethod::gauss_seidel,
                                       opt.strain_limit, opt.multilevel, opt.fas));
         RunFigures fi = run(im, opt, false);
+        std::string plan; // particles x sweeps per step of each level, the cloth first
+        for (const ImplicitLevelPlan& l : im.implicit_level_plan())
+            plan += (plan.empty() ? "" : ", ") + std::to_string(l.particles) + " x " + std::to_string(l.sweeps);
+        std::fprintf(stderr, "realtime: N = %u: levels (particles x sweeps per step) %s\n", n, plan.c_str());
         fi.solver = !opt.multilevel ? "implicit (single level)" : opt.fas ? "implicit (multilevel, FAS)" : "implicit (multilevel)";
         fi.iterations = opt.iterations;
         std::fprintf(stderr, "realtime: N = %u: explicit...\n", n);

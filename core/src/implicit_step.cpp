@@ -53,8 +53,16 @@ constexpr std::uint32_t coarse_iterations_max = 240;
 /// hang at 10 sweeps, 60 steps, two runs): 37-41 ns per particle and sweep on the 50 x 50 and 25 x 25 levels, 74-76
 /// ns on the 13 x 13 and 145-154 ns on the 7 x 7: some 5-6 us per sweep on top of ~38 ns per particle. Costed
 /// without it, the 13 x 13 and 7 x 7 levels ran 80 and 160 sweeps (now 62 and 79) and took a quarter of the step
-/// (docs/implicit.md, "Small coarse levels costed by their sweeps").
+/// (docs/implicit.md, "Small coarse levels costed by their sweeps"). Checked again after the grid layout stopped
+/// padding sub-grid rows (2026-11-28): without it the program ran 1.03x the time (farm-bench, within noise) and the
+/// strain at 2 s rose from 0.0950 to 0.1001, over the 0.10 bound.
 constexpr double sweep_floor_particles = 150.0;
+
+/// A coarse level's sweeps per step: the cloth's k times its sweep factor, at most coarse_iterations_max (or 2k).
+std::uint32_t coarse_sweeps(std::uint32_t k, double sweep_factor) noexcept {
+    return std::min<std::uint32_t>(std::max(coarse_iterations_max, 2 * k),
+                                   static_cast<std::uint32_t>(std::lround(k * sweep_factor)));
+}
 
 /// A coarser copy is kept only if it has at most this share of the next finer one's particles (a cloth whose
 /// rebuild hardly thins it, such as an outline already at its outline's own sampling, stops there) and at least
@@ -88,6 +96,16 @@ void transfer_transpose(const LevelTransfer& t, const float* src, float* out, st
 }
 
 } // namespace
+
+std::vector<ImplicitLevelPlan> Simulation::implicit_level_plan() const {
+    if (!implicit_) return {};
+    const std::uint32_t k = params_.implicit.iterations;
+    std::vector<ImplicitLevelPlan> plan{{cloth_.particle_count, k}};
+    if (params_.implicit.multilevel)
+        for (const CoarseLevel& L : implicit_->coarse)
+            plan.push_back({L.cloth.particle_count, coarse_sweeps(k, L.sweep_factor)});
+    return plan;
+}
 
 void Simulation::cook_implicit() {
     if (implicit_) return;
@@ -131,8 +149,8 @@ void Simulation::cook_implicit() {
             // thin less: its outline's own points stay), so that no level costs more than the next finer one. From
             // the second coarse level on, a sweep is costed as sweep_floor_particles more particles than the level
             // has; the first keeps twice the cloth's sweeps whatever its size (it carries the cloth's smooth error).
-            const double floor = solver->coarse.empty() ? 0.0 : sweep_floor_particles;
-            const double ratio = (double(finer_count) + floor) / (double(count) + floor);
+            const double overhead = solver->coarse.empty() ? 0.0 : sweep_floor_particles;
+            const double ratio = (double(finer_count) + overhead) / (double(count) + overhead);
             level.sweep_factor =
                 std::min(256.0, (solver->coarse.empty() ? 1.0 : solver->coarse.back().sweep_factor) *
                                     (ratio >= 3.0 ? 2.0 : std::sqrt(ratio)));
@@ -294,9 +312,7 @@ template <bool Parallel> void Simulation::multilevel_guess() {
         }
         // The level's sweeps: the cloth's times L.sweep_factor (cook_implicit), at most coarse_iterations_max.
         ImplicitParams level_params = params_.implicit;
-        const std::uint32_t k = params_.implicit.iterations;
-        level_params.iterations = std::min<std::uint32_t>(std::max(coarse_iterations_max, 2 * k),
-                                                          static_cast<std::uint32_t>(std::lround(k * L.sweep_factor)));
+        level_params.iterations = coarse_sweeps(params_.implicit.iterations, L.sweep_factor);
         L.solver.run<Parallel>({L.x0.data(), L.y0.data(), L.z0.data(), L.x.data(), L.y.data(), L.z.data(),
                                 L.inv_mass.data(), params_.colliders},
                                level_params, h, params_.air_drag);

@@ -66,6 +66,13 @@ struct ImplicitStats {
     std::uint32_t levels = 1;      ///< grids solved this step (1 + coarse levels)
 };
 
+/// One level the implicit solver solves per step (Simulation::implicit_level_plan): the cloth itself or a coarse copy
+/// of its multilevel guess.
+struct ImplicitLevelPlan {
+    std::size_t particles = 0;
+    std::uint32_t sweeps = 0; ///< per step, at most (a coarse level stops early at its tolerance)
+};
+
 /// Cooked for vertex block descent (built once per cloth): every energy term a vertex takes part in, and the vertex
 /// colouring.
 struct VbdGraph {

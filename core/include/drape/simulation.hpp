@@ -243,6 +243,9 @@ class Simulation {
     /// Levels the implicit solver solves per step: 1 + the coarse levels of its multilevel guess (only square grid and
     /// outline cloths of the fabric model have them); 0 while the implicit solver is not cooked.
     std::uint32_t implicit_levels() const noexcept;
+    /// Per level the implicit solver solves (implicit_levels() of them: the cloth first, then the coarse levels finer
+    /// first), its particles and the sweeps it runs per step at most; empty while the implicit solver is not cooked.
+    std::vector<ImplicitLevelPlan> implicit_level_plan() const;
     /// Self-collision contacts applied in the first round of the stage's last run: point-triangle and edge-edge pairs closer
     /// than the thickness, less those already held at it (within 1%) and not approaching; 0 when self-collision is off.
     std::size_t self_contacts() const noexcept { return sc_contacts_; }
