@@ -289,7 +289,12 @@ TEST(Collider, RejectsBadParametersNamingTheField) {
         }
         return "";
     };
-    EXPECT_NE(msg([] { make_sphere({0, 0, 0}, 0.0f); }).find("sphere.radius"), std::string::npos);
+    EXPECT_NE(msg([] {
+                  make_sphere({0, 0, 0}, 0.0f);
+              }).find("sphere.radius = 0.000000 m is outside the allowed range (0, 1000.000000]"),
+              std::string::npos);
+    EXPECT_NE(msg([] { make_sphere({0, 0, 0}, 2000.0f); }).find("(0, 1000.000000]"), std::string::npos);
+    EXPECT_NE(msg([] { make_sphere({0, 0, 0}, NAN); }).find("sphere.radius = nan m"), std::string::npos);
     EXPECT_NE(msg([] {
                   make_sphere({0, 0, 0}, 1.0f, {-0.1f, 0.2f});
               }).find("sphere.thickness"),

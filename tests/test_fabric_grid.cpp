@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "drape/errors.hpp"
 #include "drape/health_monitor.hpp"
@@ -51,7 +52,24 @@ TEST(FabricGrid, MembraneConstantsGiveTheFreeSidesStretchStiffness) {
     }
     HangParams hp = fabric_params(8);
     hp.fabric.density = 0.0f;
-    EXPECT_THROW(build_hang_scene(hp), InvalidInput);
+    try {
+        build_hang_scene(hp);
+        ADD_FAILURE() << "a density of 0 was accepted";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("fabric.density = 0.000000 kg/m^2 is outside the allowed range (0, inf)"),
+                  std::string::npos)
+            << e.what();
+    }
+    hp.fabric.density = 0.2f;
+    hp.fabric.damping = std::numeric_limits<float>::infinity();
+    try {
+        build_hang_scene(hp);
+        ADD_FAILURE() << "an infinite damping was accepted";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("fabric.damping = inf s is outside the allowed range [0, inf)"),
+                  std::string::npos)
+            << e.what();
+    }
 }
 
 TEST(FabricGrid, NodeMassesAddUpToDensityTimesArea) {

@@ -30,11 +30,7 @@ namespace {
 
 constexpr float max_extent = 1000.0f; // m: sizes and coordinates
 
-void check_positive(const std::string& name, float value, const char* unit) {
-    if (!(value > 0.0f && value <= max_extent))
-        throw InvalidInput(name + " = " + std::to_string(value) + unit +
-                           " is outside the allowed range (0, " + std::to_string(max_extent) + "]");
-}
+void check_size(const std::string& name, float value) { check_positive(name, value, " m", false, max_extent); }
 
 void check_point(const std::string& name, const Vec3f& p) {
     for (int k = 0; k < 3; ++k)
@@ -318,20 +314,20 @@ void check_collider(const Collider& c) {
         break;
     }
     case ColliderKind::sphere:
-        check_positive(pre + "radius", c.size[0], " m");
+        check_size(pre + "radius", c.size[0]);
         break;
     case ColliderKind::disc:
-        check_positive(pre + "radius", c.size[0], " m");
-        check_positive(pre + "height", c.size[1], " m");
+        check_size(pre + "radius", c.size[0]);
+        check_size(pre + "height", c.size[1]);
         break;
     case ColliderKind::capsule:
         check_point(pre + "end_b", c.axis);
-        check_positive(pre + "radius", c.size[0], " m");
+        check_size(pre + "radius", c.size[0]);
         break;
     case ColliderKind::ellipsoid: {
         static const char* axis_name[3] = {"semi_axes[0]", "semi_axes[1]", "semi_axes[2]"};
         for (int k = 0; k < 3; ++k)
-            check_positive(pre + axis_name[k], c.size[k], " m");
+            check_size(pre + axis_name[k], c.size[k]);
         const auto& R = c.rotation;
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) {

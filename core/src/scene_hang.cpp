@@ -12,20 +12,10 @@
 
 namespace drape {
 
-namespace {
-
-void check_positive(const std::string& what, const char* field, float value, bool zero_allowed, const char* unit) {
-    if (!std::isfinite(value) || !(zero_allowed ? value >= 0.0f : value > 0.0f))
-        throw InvalidInput(what + "." + field + " = " + std::to_string(value) + unit + " must be finite and " +
-                           (zero_allowed ? ">= 0" : "> 0"));
-}
-
-} // namespace
-
 GridMembrane grid_membrane(const Fabric& f, const std::string& what) {
-    check_positive(what, "stretch_u", f.stretch_u, false, " N/m");
-    check_positive(what, "stretch_v", f.stretch_v, false, " N/m");
-    check_positive(what, "shear", f.shear, true, " N/m");
+    check_positive(what + ".stretch_u", f.stretch_u, " N/m", false);
+    check_positive(what + ".stretch_v", f.stretch_v, " N/m", false);
+    check_positive(what + ".shear", f.shear, " N/m", true);
     // C11 = a = E_u + G^2 / b and C22 = b = E_v + G^2 / a (C12 = G): the fixed point in closed form. From the two,
     // E_u b = E_v a, so b = (E_v / E_u) a and a^2 - E_u a - E_u G^2 / E_v = 0.
     const double eu = f.stretch_u, ev = f.stretch_v, g = f.shear;
@@ -50,10 +40,10 @@ SceneBuild build_hang_scene(const HangParams& p) {
         check_range("bend ratio", p.bend_ratio, 0.0f, 1.0f, "");
         check_range("damping ratio", p.damping_ratio, 0.0f, 1.0f, "");
     } else {
-        check_positive("fabric", "density", p.fabric.density, false, " kg/m^2");
-        check_positive("fabric", "bend_u", p.fabric.bend_u, true, " N*m");
-        check_positive("fabric", "bend_v", p.fabric.bend_v, true, " N*m");
-        check_positive("fabric", "damping", p.fabric.damping, true, " s");
+        check_positive("fabric.density", p.fabric.density, " kg/m^2", false);
+        check_positive("fabric.bend_u", p.fabric.bend_u, " N*m", true);
+        check_positive("fabric.bend_v", p.fabric.bend_v, " N*m", true);
+        check_positive("fabric.damping", p.fabric.damping, " s", true);
     }
     const GridMembrane membrane = fabric ? grid_membrane(p.fabric) : GridMembrane{};
 
