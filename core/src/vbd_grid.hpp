@@ -12,9 +12,10 @@
 // the zero halo on both sides of a row (column -1 of row p is column sub_columns of row p - 1), and a halo row lies
 // above and below. A class's first cell is simd::width-aligned and its batches run through its cells as one
 // sequence, across row ends, so the lanes wasted on halo are one per row (before 2026-11-28 every row was padded to
-// whole batches with 16 halo columns: 71 % of the lanes of N = 100's finest level did work, 19 % of its 7 x 7 level;
-// now 96 % and 56 %). Cells outside the cloth hold zero mass (never written) and zero coefficients (they add exactly
-// nothing); a halo lane's neighbour loads land on finite cells of the allocation and its results are dropped.
+// whole batches with 16 halo columns: 68 % of the lanes of N = 100's finest level did work, 11 % of its 7 x 7 level;
+// now 93 % and 34 %; docs/implicit.md, "Sub-grids without row padding"). Cells outside the cloth hold zero mass (never
+// written) and zero coefficients (they add exactly nothing); a halo lane's neighbour loads land on finite cells of the
+// allocation and its results are dropped.
 #pragma once
 
 #include <array>
