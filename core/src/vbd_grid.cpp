@@ -91,17 +91,16 @@ std::unique_ptr<GridLayout> GridLayout::cook(const VbdGraph& g, std::uint32_t ro
     L->period_ = period;
     L->columns_ = columns;
     L->particles_ = n;
-    L->sub_rows_ = (rows + period - 1) / period;
-    L->sub_columns_ = (columns + period - 1) / period;
+    const std::size_t sub_rows = (rows + period - 1) / period, sub_columns = (columns + period - 1) / period;
     constexpr std::size_t W = simd::width;
     auto round_up = [](std::size_t v) { return (v + W - 1) / W * W; };
-    L->stride_ = L->sub_columns_ + 1;
-    const std::size_t stride = L->stride_, span = std::size_t(L->sub_rows_) * stride - 1; // first to last cell
+    L->stride_ = std::uint32_t(sub_columns + 1);
+    const std::size_t stride = L->stride_, span = sub_rows * stride - 1; // first to last cell
     L->batches_ = (span + W - 1) / W;
     // Halo lanes load neighbours up to stride + 1 cells before the first cell and after the last batch; a class's
     // halo (row -1 ... row sub_rows) and its batches stay clear of the next class's.
     L->front_ = round_up(stride + 1);
-    L->region_ = round_up((std::size_t(L->sub_rows_) + 2) * stride + W);
+    L->region_ = round_up((sub_rows + 2) * stride + W);
     L->cells_ = L->front_ + std::size_t(period) * period * L->region_;
     // Chunks of about 64 cells: a coarse level's colour then still splits into several chunks. Against 256
     // (2-core AVX2 machine, drape_implicit throughput, 2 threads, alternating builds): N = 316 per iteration

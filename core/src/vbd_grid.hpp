@@ -90,7 +90,8 @@ class GridLayout {
         return (cell - cell % simd::width) * bend_dir_.size() + slot * simd::width + cell % simd::width;
     }
 
-    std::uint32_t period_ = 0, columns_ = 0, sub_rows_ = 0, sub_columns_ = 0, stride_ = 0;
+    std::uint32_t period_ = 0, columns_ = 0;
+    std::uint32_t stride_ = 0; ///< a class's sub-grid row: its columns + 1 halo column
     std::size_t front_ = 0;  ///< cells before class 0's first cell (its halo, and halo lanes' loads)
     std::size_t region_ = 0; ///< cells from one class's first cell to the next one's (a multiple of simd::width)
     std::size_t cells_ = 0, batches_ = 0, batches_per_chunk_ = 1, chunks_ = 0, particles_ = 0;
