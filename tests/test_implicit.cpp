@@ -25,6 +25,7 @@
 #include "materials.hpp"
 #include "test_helpers.hpp"
 #include "vbd.hpp"
+#include "vbd_grid.hpp"
 
 using namespace drape;
 
@@ -550,7 +551,8 @@ TEST(Implicit, ValidatesItsParameters) {
 // The SIMD sweeps give the scalar reference's bits (vbd::solve_vertex one vertex at a time): on the gathered slices
 // (vbd_batch.hpp: a colour's vertices simd::width at a time) and, for a grid cloth, on its colour sub-grids
 // (vbd_grid.hpp: contiguous loads). Cases: a grid with bending and damping in contact with a sphere, the same grid in
-// the seeds' springs model (bend springs two apart, no bending rows), a 6 x 6 grid, and a sewn T-shirt (hinge
+// the seeds' springs model (bend springs two apart, no bending rows), a fabric without bending (the layout's period
+// 2; the others have 3), a 6 x 6 grid, and a sewn T-shirt (hinge
 // bending, seams, the body's colliders: no grid); the grid again with contact planes (self-collision's re-solve).
 TEST(Implicit, SimdSweepsMatchTheScalarReferenceBitForBit) {
     // planes: every fifth vertex held at or above its start height (self-collision's contact planes, LevelState).
@@ -625,6 +627,23 @@ TEST(Implicit, SimdSweepsMatchTheScalarReferenceBitForBit) {
     ASSERT_TRUE(spring_grid.cloth.bending.empty());
     shake(spring_grid.initial);
     compare(spring_grid.cloth, spring_grid.initial, sphere, true);
+    // A fabric without bending has springs one row and column apart only: its colouring is the pattern with P = 2
+    // (four colours), the layout's other period.
+    HangParams limp = fabric_hang(29);
+    limp.fabric.bend_u = limp.fabric.bend_v = 0.0f;
+    limp.fabric.damping = 1e-3f;
+    SceneBuild limp_grid = build_hang_scene(limp);
+    {
+        vbd::Solver probe;
+        probe.cook(limp_grid.cloth);
+        const auto layout = vbd::GridLayout::cook(probe.graph(), 29, 29);
+        ASSERT_NE(layout, nullptr);
+        EXPECT_EQ(layout->period(), 2u);
+        EXPECT_EQ(probe.graph().colour_count(), 4u);
+    }
+    shake(limp_grid.initial);
+    compare(limp_grid.cloth, limp_grid.initial, sphere, true);
+    compare(limp_grid.cloth, limp_grid.initial, {}, true, true);
     SceneBuild small = build_hang_scene(fabric_hang(6)); // the size of the multilevel solver's coarsest levels
     shake(small.initial);
     compare(small.cloth, small.initial, {}, true);
