@@ -121,7 +121,8 @@ TEST(StrainLimit, IntervalStaysStableForBothIntegrators) {
 // formula written out again here, and must give the same bits: positions (and, in the explicit solver's form,
 // velocities) of a cloth whose particles start scattered by up to 30 % of the spacing, so most springs are over the
 // limit and the corrections run for many passes. Both forms: the explicit solver's (mass-weighted, shear springs,
-// velocities) and the implicit solver's (one-sided from the pins, no shear springs, positions only).
+// velocities) and the implicit solver's (one-sided from the pins, no shear springs, positions only, compression of
+// structural springs bounded too).
 TEST(StrainLimit, SkippingUnmovedGroupsKeepsTheBitsOfFullSweeps) {
     for (const bool frame : {false, true}) {
         HangParams hp;
@@ -167,6 +168,7 @@ TEST(StrainLimit, SkippingUnmovedGroupsKeepsTheBitsOfFullSweeps) {
                 }
             }
         const float stretch = 1.0f + 0.05f, tolerated = 1.0f + 1.05f * 0.05f, vel_scale = 1.0f / p.dt;
+        const float squeeze = 1.0f - 0.05f, squeeze_tolerated = 1.0f - 1.05f * 0.05f;
         const ColourGroups& g = sim.strain_limit_groups();
         std::uint32_t passes = 0, corrections = 0;
         for (bool over = true; over && passes < strain_limit_max_passes; ++passes) {
@@ -178,10 +180,17 @@ TEST(StrainLimit, SkippingUnmovedGroupsKeepsTheBitsOfFullSweeps) {
                     const std::uint32_t ia = e.a, ib = e.b;
                     const float dx = x[ib] - x[ia], dy = y[ib] - y[ia], dz = z[ib] - z[ia];
                     const float l2 = dx * dx + dy * dy + dz * dz;
-                    const float l_max = stretch * e.rest;
-                    if (!(l2 > l_max * l_max)) continue;
-                    const float l_tol = tolerated * e.rest;
-                    over = over || l2 > l_tol * l_tol;
+                    float l_max = stretch * e.rest;
+                    if (l2 > l_max * l_max) {
+                        const float l_tol = tolerated * e.rest;
+                        over = over || l2 > l_tol * l_tol;
+                    } else { // the frame form also bounds compression: the ends move apart to squeeze x rest
+                        const float l_min = squeeze * e.rest;
+                        if (!frame || e.kind == SpringKind::seam || !(l2 < l_min * l_min) || l2 == 0.0f) continue;
+                        const float l_tol = squeeze_tolerated * e.rest;
+                        over = over || l2 < l_tol * l_tol;
+                        l_max = l_min;
+                    }
                     float wa = inv_mass[ia], wb = inv_mass[ib];
                     if (frame && level[ia] < level[ib] && wb != 0.0f) wa = 0.0f;
                     if (frame && level[ib] < level[ia] && wa != 0.0f) wb = 0.0f;

@@ -18,6 +18,7 @@ struct RunFigures {
     double wall = 0.0;      ///< s
     bool full = false;      ///< the whole duration ran
     float strain = NAN;     ///< max structural strain at the end of the timed run (full runs only)
+    float strain_run = NAN; ///< the largest at the ends of the run's chunks of ~0.05 s (full runs only)
     bool finite = true;
     double relative_residual = NAN; ///< implicit: the last step's
     double settled_at = 0.0;        ///< s of simulated time of the settled shape (0: none)
@@ -34,19 +35,21 @@ RunFigures run(Simulation& sim, const Options& opt, bool budgeted) {
     const std::size_t chunk = std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(opt.explicit_short / f.dt)));
     std::size_t done = 0;
     try {
-        const auto t0 = std::chrono::steady_clock::now();
+        float most = 0.0f;
         while (done < total) {
             const std::size_t k = std::min(chunk, total - done);
+            const auto t0 = std::chrono::steady_clock::now();
             sim.step(k);
+            f.wall += seconds_since(t0); // the strain samples below are not timed
             done += k;
-            f.wall = seconds_since(t0);
             if (budgeted && f.wall / static_cast<double>(done) * static_cast<double>(total) > opt.explicit_budget) break;
+            most = std::max(most, sim.health().max_structural_strain);
         }
         f.simulated = static_cast<double>(done) * f.dt;
         f.full = done == total;
         const Health h = sim.health();
         f.finite = h.finite;
-        if (f.full) f.strain = h.max_structural_strain;
+        if (f.full) f.strain = h.max_structural_strain, f.strain_run = most;
         if (sim.params().solver == Solver::implicit) f.relative_residual = sim.implicit_stats().relative_residual;
         if (!f.full || !f.finite || opt.settle_time <= 0.0) return f;
         const std::size_t settle = static_cast<std::size_t>(std::llround(opt.settle_time / f.dt));
@@ -77,7 +80,7 @@ int cmd_realtime(const Options& opt) {
                   opt.duration.value_or(2.0), opt.settle_time);
     t.title = title;
     t.columns = {"N",          "particles",      "solver",       "dt (s)",      "iterations", "strain limit",
-                 "timed (s)",  "wall (s)",       "real-time x",  "max strain at t_end", "finite",
+                 "timed (s)",  "wall (s)",       "real-time x",  "max strain at t_end", "max strain over the run", "finite",
                  "last rel. residual", "settled at (s)", "distance to reference (mm)", "quality"};
     std::vector<std::uint32_t> sizes = opt.sizes.empty() ? std::vector<std::uint32_t>{100, 316, 1000} : opt.sizes;
     for (std::uint32_t n : sizes) {
@@ -138,7 +141,7 @@ int cmd_realtime(const Options& opt) {
             if (!f->full) quality = "n/a (short run)";
             else if (!f->finite) quality = "no (not finite)";
             else {
-                const bool strain_ok = f->strain <= 0.10f;
+                const bool strain_ok = f->strain <= 0.10f && f->strain_run <= 0.10f;
                 const bool shape_ok = std::isfinite(dist) && dist <= 0.01;
                 quality = strain_ok && shape_ok ? "yes" : !strain_ok ? "no (strain)" : std::isfinite(dist) ? "no (shape)"
                                                                                                             : "shape not measured";
@@ -150,7 +153,8 @@ int cmd_realtime(const Options& opt) {
                    implicit && opt.strain_limit > 0.0f ? num(opt.strain_limit, "%.3g") : txt("off"),
                    num(f->simulated, "%.3g"), num(f->wall, "%.3g"),
                    f->full ? num(f->simulated / f->wall, "%.3g") : txt(rtf),
-                   f->full ? num(f->strain, "%.4f") : txt("-"), txt(f->finite ? "yes" : "no"),
+                   f->full ? num(f->strain, "%.4f") : txt("-"), f->full ? num(f->strain_run, "%.4f") : txt("-"),
+                   txt(f->finite ? "yes" : "no"),
                    implicit ? num(f->relative_residual, "%.2e") : txt("-"),
                    f->settled_at > 0.0 ? num(f->settled_at, "%.3g") : txt("-"),
                    std::isfinite(dist) ? num(dist * 1000.0, "%.3g") : txt("-"), txt(quality)});
@@ -159,8 +163,9 @@ int cmd_realtime(const Options& opt) {
         }
     }
     rep.tables.push_back(std::move(t));
-    rep.notes.push_back("Quality: max structural strain at the end of the timed run <= 0.10, finite, and the settled "
-                        "shape within 10 mm (max over particles) of the reference equilibrium. An explicit run whose "
+    rep.notes.push_back("Quality: max structural strain (stretch or compression) at the end of the timed run and over "
+                        "it (sampled every ~0.05 s simulated, not timed) <= 0.10, finite, and the settled shape within "
+                        "10 mm (max over particles) of the reference equilibrium. An explicit run whose "
                         "projected wall time exceeds the budget (--explicit-budget) is timed over a short interval "
                         "only: its real-time factor is labelled '(from T s)' and its strain and shape are not measured.");
     rep.print(opt.json, opt.json_out);

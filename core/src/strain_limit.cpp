@@ -130,7 +130,9 @@ void Simulation::cook_strain_limit() {
         const Edge& e = cloth_.edges[limit_groups_.edge_index[k]];
         limit_a_[k] = e.a;
         limit_b_[k] = e.b;
-        limit_inner_[k] = e.kind == SpringKind::shear ? strain_limit::shear : 0;
+        limit_inner_[k] = e.kind == SpringKind::shear  ? strain_limit::shear
+                          : e.kind == SpringKind::seam ? strain_limit::seam
+                                                       : 0;
         limit_rest_[k] = edge_rest_.empty() ? e.rest : edge_rest_[limit_groups_.edge_index[k]];
         if (e.kind == SpringKind::seam) {
             limit_seam_slot_.push_back(static_cast<std::uint32_t>(k));
@@ -163,7 +165,7 @@ void Simulation::update_limit_levels() noexcept {
     limit_levels(cloth_.inv_mass.data()); // every particle fixed now: authored pins, user pins, the grab
     for (std::size_t k = 0; k < limit_a_.size(); ++k) {
         const std::uint32_t la = limit_level_[limit_a_[k]], lb = limit_level_[limit_b_[k]];
-        limit_inner_[k] = static_cast<std::uint8_t>((limit_inner_[k] & strain_limit::shear) |
+        limit_inner_[k] = static_cast<std::uint8_t>((limit_inner_[k] & (strain_limit::shear | strain_limit::seam)) |
                                                     (la < lb ? strain_limit::a_inner : 0) |
                                                     (lb < la ? strain_limit::b_inner : 0));
     }
@@ -190,6 +192,8 @@ template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, b
                                frame_form ? limit_inner_.data() : nullptr,
                                1.0f + sl.ratio,
                                1.0f + 1.05f * sl.ratio,
+                               frame_form ? std::max(0.0f, 1.0f - sl.ratio) : 0.0f,
+                               frame_form ? std::max(0.0f, 1.0f - 1.05f * sl.ratio) : 0.0f,
                                frame_form                                        ? 0.0f
                                : params_.integrator == Integrator::symplectic_euler ? 1.0f / (float(sl.every) * params_.dt)
                                                                                     : 1.0f / float(sl.every),

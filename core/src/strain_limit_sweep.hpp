@@ -13,7 +13,7 @@ namespace drape::strain_limit {
 
 /// Flags of Simulation::limit_inner_: end a (b) is fewer springs away from the authored pins than the other end; the
 /// spring is a shear spring.
-inline constexpr std::uint8_t a_inner = 1, b_inner = 2, shear = 4;
+inline constexpr std::uint8_t a_inner = 1, b_inner = 2, shear = 4, seam = 8;
 
 struct Args {
     float* __restrict x;
@@ -31,6 +31,13 @@ struct Args {
     const std::uint8_t* __restrict inner;
     float stretch;   ///< 1 + ratio
     float tolerated; ///< 1 + 1.05 ratio: a spring longer than this before its correction keeps the sweeps going
+    /// Frame form: 1 - ratio, the shortest a structural spring may be (0 in the explicit form: no bound). Its
+    /// one-sided corrections pull a particle next to a clip along each stretched spring towards the clip, which
+    /// squeezed the springs between it and the clip's other particles: 22 % (N = 200) and 36 % (N = 316) of the
+    /// wool hang's structural springs at 0.6 - 1.4 s with the limit at 0.095 (docs/implicit.md, "Compression at
+    /// the clips").
+    float squeeze;
+    float squeeze_tolerated; ///< 1 - 1.05 ratio: shorter keeps the sweeps going
     /// Change of u, v, w per unit displacement: Euler (velocity) 1 / (K dt), Verlet (displacement per step) 1 / K.
     float vel_scale;
     /// Per particle (CSR), the colour groups holding one of its springs; per group the sequence number of the last
@@ -50,10 +57,21 @@ template <bool Frame> inline unsigned limit_spring(const Args& c, std::size_t k)
     const std::uint32_t ia = c.a[k], ib = c.b[k];
     const float dx = c.x[ib] - c.x[ia], dy = c.y[ib] - c.y[ia], dz = c.z[ib] - c.z[ia];
     const float l2 = dx * dx + dy * dy + dz * dz;
-    const float l_max = c.stretch * c.rest[k];
-    if (!(l2 > l_max * l_max)) return 0;
-    const float l_tol = c.tolerated * c.rest[k];
-    const unsigned is_over = l2 > l_tol * l_tol ? over : 0;
+    float l_max = c.stretch * c.rest[k];
+    unsigned is_over;
+    if (l2 > l_max * l_max) {
+        const float l_tol = c.tolerated * c.rest[k];
+        is_over = l2 > l_tol * l_tol ? over : 0;
+    } else {
+        // Frame form, a structural spring shorter than squeeze x rest: its ends move apart by the shortfall (the
+        // same formula with l_max = the shortest length: e < 0). A spring of zero length has no direction.
+        if (!Frame || (c.inner[k] & seam)) return 0;
+        const float l_min = c.squeeze * c.rest[k];
+        if (!(l2 < l_min * l_min) || l2 == 0.0f) return 0;
+        const float l_tol = c.squeeze_tolerated * c.rest[k];
+        is_over = l2 < l_tol * l_tol ? over : 0;
+        l_max = l_min;
+    }
     float wa = c.inv_mass[ia], wb = c.inv_mass[ib];
     if (Frame) { // the end nearer the fixed particles stays (unless the far end cannot move)
         if ((c.inner[k] & a_inner) && wb != 0.0f) wa = 0.0f;
