@@ -52,11 +52,19 @@ void Simulation::cook_strain_limit() {
     for (std::uint32_t k = 0; k < cloth_.edges.size(); ++k)
         if (cloth_.edges[k].kind != SpringKind::bend) limited.push_back(k);
 
-    // Adjacency over the limited springs (kept: update_limit_levels walks it again when pins or grabs change).
+    // Adjacency over the limited springs but the shear springs (kept: update_limit_levels walks it again when pins or
+    // grabs change). Levels are then structural (on a grid: row plus column) distances from the pins, so the two ends
+    // of every structural spring have different levels and the frame form moves the outer one. Counting shear springs
+    // made the levels king-move distances: along a row within a clip's square every particle had the same level, the
+    // springs between them moved both ends, their corrections crept along the row sweep by sweep, and at N = 316 and
+    // 1000 the limit's 100 sweeps left every other spring of those rows over it (0.104 and 0.206 at 0.9 s of the wool
+    // hang; docs/implicit.md, "Compression next to the clips").
     std::vector<std::uint32_t>& adj_offsets = limit_adj_offsets_;
     std::vector<std::uint32_t>& adj = limit_adj_;
+    const auto levelled = [&](std::uint32_t k) { return cloth_.edges[k].kind != SpringKind::shear; };
     adj_offsets.assign(n + 1, 0);
     for (std::uint32_t k : limited) {
+        if (!levelled(k)) continue;
         ++adj_offsets[cloth_.edges[k].a + 1];
         ++adj_offsets[cloth_.edges[k].b + 1];
     }
@@ -65,6 +73,7 @@ void Simulation::cook_strain_limit() {
     {
         std::vector<std::uint32_t> fill(adj_offsets.begin(), adj_offsets.end() - 1);
         for (std::uint32_t k : limited) {
+            if (!levelled(k)) continue;
             adj[fill[cloth_.edges[k].a]++] = cloth_.edges[k].b;
             adj[fill[cloth_.edges[k].b]++] = cloth_.edges[k].a;
         }
@@ -179,7 +188,7 @@ template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, b
     // spring next to the grab; the mass-weighted form without shear springs and velocities let the stretch creep up
     // over 20 steps of the NoAllocation grab at N = 48; the full explicit form holds there, as it always did).
     const bool frame_form = strain_limit_frame_form();
-    const strain_limit::Args c{out.x.data(),
+    strain_limit::Args c{out.x.data(),
                                out.y.data(),
                                out.z.data(),
                                out.u.data(),
@@ -204,6 +213,7 @@ template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, b
     // At least `passes` sweeps; more (up to strain_limit_max_passes) while a sweep still found a spring over
     // 1.05 x the limit, so a limit that can hold does (the JSON of `drape run` reports what was honoured).
     for (std::uint32_t pass = 0; pass < strain_limit_max_passes; ++pass) {
+        c.one_sided = pass < strain_limit_one_sided_passes;
         std::atomic<bool> over{false}; // an OR: the same whatever the order of the chunks
         for (std::size_t g = 0; g < groups; ++g) {
             const std::uint64_t seq = ++limit_seq_;

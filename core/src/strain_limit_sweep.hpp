@@ -45,6 +45,9 @@ struct Args {
     const std::uint32_t* __restrict particle_group_offsets;
     const std::uint32_t* __restrict particle_groups;
     std::uint64_t* group_moved;
+    /// Frame form: the end nearer the fixed particles stays (the first strain_limit_one_sided_passes sweeps of a
+    /// step), else both ends move by inverse mass.
+    bool one_sided = true;
 };
 
 /// Spring k: d = x_b - x_a, l = |d|; over l_max = stretch rest its ends move toward each other by the excess, shared
@@ -73,7 +76,7 @@ template <bool Frame> inline unsigned limit_spring(const Args& c, std::size_t k)
         l_max = l_min;
     }
     float wa = c.inv_mass[ia], wb = c.inv_mass[ib];
-    if (Frame) { // the end nearer the fixed particles stays (unless the far end cannot move)
+    if (Frame && c.one_sided) { // the end nearer the fixed particles stays (unless the far end cannot move)
         if ((c.inner[k] & a_inner) && wb != 0.0f) wa = 0.0f;
         if ((c.inner[k] & b_inner) && wa != 0.0f) wb = 0.0f;
     }

@@ -54,6 +54,13 @@ struct WindField {
 /// At least `passes` sweeps run; more, up to strain_limit_max_passes, while a sweep still finds a spring longer than
 /// (1 + 1.05 ratio) l0, so a limit that can hold does (within the 10 % that `drape run` calls honoured).
 inline constexpr std::uint32_t strain_limit_max_passes = 100;
+/// The implicit solver's form of the limit moves only the end of a spring farther from the fixed particles, for this
+/// many sweeps of a step; later sweeps (the step's limit not yet held) move both ends by inverse mass. Where the
+/// levels from two clips meet (the middle of the wool hang's bottom edge) each side is pulled towards its own clip
+/// and the one-sided corrections cannot shorten the spring between them: at N = 100 that spring stayed at 0.111 with
+/// the limit at 0.095 through 100 sweeps; with the switch at 30 or 60 sweeps the whole run kept within 0.098 at
+/// N = 100, 0.099 at N = 200, 316 and 1000 (docs/implicit.md, "Compression next to the clips").
+inline constexpr std::uint32_t strain_limit_one_sided_passes = 50;
 /// Provot strain limiting (seed 001 section 2; Provot 1995): after each substep, every structural, shear and seam
 /// spring longer than (1 + ratio) l0 has its ends moved toward each other by inverse mass, colour group by colour
 /// group, `passes` times or more (above). Groups are ordered outward from the cloth's authored pins (core/src/strain_limit.cpp), so one pass carries
