@@ -18,10 +18,10 @@
 // count.
 //
 // Order: plain Gauss-Seidel over greedy colours converges slowly when the stretch is global (a cloth hanging from
-// pins carries its whole weight outward from them). So the springs are levelled by breadth-first distance from the
-// authored pins (level of a spring = the larger level of its ends), coloured level by level and processed from the
-// pins outward: each pass carries a correction from the pins to the free edge. A cloth without pins has a single
-// level. User pins and grabs (inverse mass 0) keep their ends fixed.
+// pins carries its whole weight outward from them). So the springs are levelled by breadth-first distance over the
+// structural and seam springs from the authored pins (level of a spring = the larger level of its ends), coloured
+// level by level and processed from the pins outward: each pass carries a correction from the pins to the free edge.
+// A cloth without pins has a single level. User pins and grabs (inverse mass 0) keep their ends fixed.
 // With colliders, Simulation::step interleaves: sweep, collide, sweep, collide, ... (collide last), so a particle a
 // collider pushed out is limited again and no particle ends a substep inside a collider.
 #include <algorithm>
