@@ -189,26 +189,26 @@ template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, b
     // over 20 steps of the NoAllocation grab at N = 48; the full explicit form holds there, as it always did).
     const bool frame_form = strain_limit_frame_form();
     strain_limit::Args c{out.x.data(),
-                               out.y.data(),
-                               out.z.data(),
-                               out.u.data(),
-                               out.v.data(),
-                               out.w.data(),
-                               cloth_.inv_mass.data(),
-                               limit_a_.data(),
-                               limit_b_.data(),
-                               limit_rest_.data(),
-                               frame_form ? limit_inner_.data() : nullptr,
-                               1.0f + sl.ratio,
-                               1.0f + 1.05f * sl.ratio,
-                               frame_form ? std::max(0.0f, 1.0f - sl.ratio) : 0.0f,
-                               frame_form ? std::max(0.0f, 1.0f - 1.05f * sl.ratio) : 0.0f,
-                               frame_form                                        ? 0.0f
-                               : params_.integrator == Integrator::symplectic_euler ? 1.0f / (float(sl.every) * params_.dt)
-                                                                                    : 1.0f / float(sl.every),
-                               limit_particle_group_offsets_.data(),
-                               limit_particle_groups_.data(),
-                               limit_group_moved_.data()};
+                         out.y.data(),
+                         out.z.data(),
+                         out.u.data(),
+                         out.v.data(),
+                         out.w.data(),
+                         cloth_.inv_mass.data(),
+                         limit_a_.data(),
+                         limit_b_.data(),
+                         limit_rest_.data(),
+                         frame_form ? limit_inner_.data() : nullptr,
+                         1.0f + sl.ratio,
+                         1.0f + 1.05f * sl.ratio,
+                         frame_form ? std::max(0.0f, 1.0f - sl.ratio) : 0.0f,
+                         frame_form ? std::max(0.0f, 1.0f - 1.05f * sl.ratio) : 0.0f,
+                         frame_form                                        ? 0.0f
+                         : params_.integrator == Integrator::symplectic_euler ? 1.0f / (float(sl.every) * params_.dt)
+                                                                              : 1.0f / float(sl.every),
+                         limit_particle_group_offsets_.data(),
+                         limit_particle_groups_.data(),
+                         limit_group_moved_.data()};
     const std::size_t groups = limit_groups_.group_count();
     // At least `passes` sweeps; more (up to strain_limit_max_passes) while a sweep still found a spring over
     // 1.05 x the limit, so a limit that can hold does (the JSON of `drape run` reports what was honoured).

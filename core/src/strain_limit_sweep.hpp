@@ -12,7 +12,7 @@
 namespace drape::strain_limit {
 
 /// Flags of Simulation::limit_inner_: end a (b) is fewer springs away from the authored pins than the other end; the
-/// spring is a shear spring.
+/// spring is a shear spring; a seam spring.
 inline constexpr std::uint8_t a_inner = 1, b_inner = 2, shear = 4, seam = 8;
 
 struct Args {
@@ -33,9 +33,9 @@ struct Args {
     float tolerated; ///< 1 + 1.05 ratio: a spring longer than this before its correction keeps the sweeps going
     /// Frame form: 1 - ratio, the shortest a structural spring may be (0 in the explicit form: no bound). Its
     /// one-sided corrections pull a particle next to a clip along each stretched spring towards the clip, which
-    /// squeezed the springs between it and the clip's other particles: 22 % (N = 200) and 36 % (N = 316) of the
-    /// wool hang's structural springs at 0.6 - 1.4 s with the limit at 0.095 (docs/implicit.md, "Compression at
-    /// the clips").
+    /// squeezed the springs between it and the clip's other particles by up to 22 % (N = 200) and 36 % (N = 316)
+    /// at 0.6 - 1.4 s of the wool hang with the limit at 0.095 (docs/implicit.md, "Compression next to the
+    /// clips").
     float squeeze;
     float squeeze_tolerated; ///< 1 - 1.05 ratio: shorter keeps the sweeps going
     /// Change of u, v, w per unit displacement: Euler (velocity) 1 / (K dt), Verlet (displacement per step) 1 / K.
@@ -50,8 +50,8 @@ struct Args {
     bool one_sided = true;
 };
 
-/// Spring k: d = x_b - x_a, l = |d|; over l_max = stretch rest its ends move toward each other by the excess, shared
-/// by inverse mass (x_a += w_a e d, x_b -= w_b e d, e = (l - l_max) / (l (w_a + w_b))). Returns `over` if it was
+/// Spring k: d = x_b - x_a, l = |d|; over l_max = stretch rest its ends move toward each other by the excess (frame
+/// form: under squeeze rest, a structural spring's ends move apart by the shortfall), shared by inverse mass (x_a += w_a e d, x_b -= w_b e d, e = (l - l_max) / (l (w_a + w_b))). Returns `over` if it was
 /// longer than the tolerated stretch, plus `moved` if its ends were moved. Frame: the implicit solver's form
 /// (c.inner set), else the explicit solver's.
 inline constexpr unsigned over = 1, moved = 2;
