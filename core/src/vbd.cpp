@@ -439,7 +439,9 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     // Chebyshev's extrapolation and contact disagree (it throws points a collider holds back into the air: a cloth
     // resting on the ground bounced 3 cm, measured), so with colliders the sweeps run plain.
     const bool planes = st.plane_c != nullptr;
-    const bool chebyshev = ip.chebyshev_rho > 0.0f && st.colliders.empty() && !planes;
+    // With few sweeps its extrapolation is left uncorrected (chebyshev_min_iterations): plain sweeps.
+    const bool chebyshev =
+        ip.chebyshev_rho > 0.0f && st.colliders.empty() && !planes && ip.iterations >= chebyshev_min_iterations;
     const float rho2 = ip.chebyshev_rho * ip.chebyshev_rho;
     const std::size_t blocks = (count + block_particles - 1) / block_particles;
     float omega = 1.0f;

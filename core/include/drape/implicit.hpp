@@ -39,11 +39,19 @@ enum class ImplicitMethod : std::uint8_t {
     jacobi,       ///< every vertex from the previous sweep's positions (the parallel-everything variant; slower)
 };
 
+/// The fewest sweeps per step with which Chebyshev acceleration runs. Its extrapolation of the last sweeps is left
+/// uncorrected when few follow: on the N = 100 wool hang (h = 1/30 s, no strain limit, 2 s; max structural strain over
+/// the run) 2 and 3 sweeps with rho 0.9 blew up (the health monitor stopped the run), 4, 5 and 6 sweeps reached 2.21,
+/// 0.78 and 0.79 against 0.86, 0.68 and 0.61 plain; from 7 sweeps on it helps (7: 0.53 against 0.56, 8: 0.36 against
+/// 0.51, 10: 0.29 against 0.45). docs/implicit.md, "Few sweeps without Chebyshev".
+inline constexpr std::uint32_t chebyshev_min_iterations = 7;
+
 struct ImplicitParams {
     std::uint32_t iterations = 30;  ///< sweeps per step (the most, with a tolerance), 1..1000
     /// Stop early once the sweep residual is below tolerance x the first sweep's (0 = always run `iterations`), 0..1.
     float tolerance = 0.0f;
-    /// Chebyshev acceleration's estimate of the sweep's spectral radius, [0, 1); 0 = off.
+    /// Chebyshev acceleration's estimate of the sweep's spectral radius, [0, 1); 0 = off. A level whose step runs
+    /// fewer than chebyshev_min_iterations sweeps runs them plain.
     float chebyshev_rho = 0.9f;
     ImplicitMethod method = ImplicitMethod::gauss_seidel;
     /// On a grid or outline cloth of the fabric model: start each step from the same step solved on coarser copies of
