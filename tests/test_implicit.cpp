@@ -454,7 +454,7 @@ TEST(Implicit, EnergyFallsEverySweepAndReachesTheReferenceMinimum) {
     // Measured 0.104 mm from this start (0.084 mm from the start the multilevel steps gave before the first coarse
     // level's free-cloth rule; 0.134 mm from the one they give now). The sweeps level off there: 400 give 0.114 mm,
     // and from the starts the multilevel steps give after 2, 3, 5 and 6 steps 300 sweeps give 0.055 / 0.058 / 0.29 /
-    // 0.50 mm (docs/implicit.md, "Fewer coarse sweeps"). The bound was 0.1 mm.
+    // 0.50 mm (docs/implicit.md, "First coarse level at the cloth's sweeps on a free cloth"). The bound was 0.1 mm.
     EXPECT_LT(distance, 1.5e-4);
 }
 
