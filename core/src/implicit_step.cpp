@@ -69,8 +69,8 @@ std::uint32_t coarse_sweeps(std::uint32_t k, double sweep_factor, bool first_fre
 /// Whether the first coarse level runs the cloth's k sweeps instead of 2k: on a cloth that touches nothing (no
 /// collider, no self-collision) in a step of fewer than coarse_iterations_max / 2 sweeps. That level's sweeps cost
 /// half the cloth's at 2k and a quarter at k: the wool hang at 10 sweeps with the strain limit at 0.095 ran 1.06x
-/// (N = 100) and 1.14x (N = 316) faster in one run each (paired whole-process wall 0.91 and 0.94; no gain at
-/// N = 1000), its structural strain within 0.10 over the whole run. Contact keeps 2k (the crumpled pile's contact
+/// (N = 100), 1.14x (N = 316) and 1.06-1.07x (N = 1000) faster (paired whole-process wall 0.91 and 0.94 at N = 100 and
+/// 316), its structural strain within 0.10 over the whole run. Contact keeps 2k (the crumpled pile's contact
 /// sub-steps at k: 22 intersecting pairs and 0.78 strain), and so does a step asked to converge (the one-step
 /// reference at 300 sweeps: 0.56 mm from Newton's minimum at k, 0.08 mm at 2k); a quarter of every level's sweeps fed
 /// energy into a grabbed cloth (docs/implicit.md, "First coarse level at the cloth's sweeps on a free cloth").
