@@ -58,14 +58,6 @@ constexpr std::uint32_t coarse_iterations_max = 240;
 /// strain at 2 s rose from 0.0950 to 0.1001, over the 0.10 bound.
 constexpr double sweep_floor_particles = 150.0;
 
-/// A coarse level's sweeps per step: the cloth's k times its sweep factor, at most coarse_iterations_max (or 2k);
-/// halved where `first_free` (free_first_level).
-std::uint32_t coarse_sweeps(std::uint32_t k, double sweep_factor, bool first_free) noexcept {
-    const double factor = first_free ? 0.5 * sweep_factor : sweep_factor;
-    return std::min<std::uint32_t>(std::max(coarse_iterations_max, 2 * k),
-                                   static_cast<std::uint32_t>(std::lround(k * factor)));
-}
-
 /// Whether the first coarse level runs the cloth's k sweeps instead of 2k: on a cloth that touches nothing (no
 /// collider, no self-collision) in a step of fewer than coarse_iterations_max / 2 sweeps. That level's sweeps cost
 /// half the cloth's at 2k and a quarter at k: the wool hang at 10 sweeps with the strain limit at 0.095 ran 1.06x
@@ -76,6 +68,16 @@ std::uint32_t coarse_sweeps(std::uint32_t k, double sweep_factor, bool first_fre
 /// energy into a grabbed cloth (docs/implicit.md, "First coarse level at the cloth's sweeps on a free cloth").
 bool free_first_level(const SimulationParams& p) noexcept {
     return p.colliders.empty() && p.self_collision.thickness == 0.0f && 2 * p.implicit.iterations < coarse_iterations_max;
+}
+
+/// Coarse level `level`'s sweeps per step (0: the finest coarse level): the cloth's k times its sweep factor, at most
+/// coarse_iterations_max (or 2k); the first level of a free cloth half that (free_first_level). The plan
+/// (implicit_level_plan) and the step (multilevel_guess) both ask here.
+std::uint32_t coarse_sweeps(const SimulationParams& p, double sweep_factor, std::size_t level) noexcept {
+    const std::uint32_t k = p.implicit.iterations;
+    const double factor = level == 0 && free_first_level(p) ? 0.5 * sweep_factor : sweep_factor;
+    return std::min<std::uint32_t>(std::max(coarse_iterations_max, 2 * k),
+                                   static_cast<std::uint32_t>(std::lround(k * factor)));
 }
 
 /// A coarser copy is kept only if it has at most this share of the next finer one's particles (a cloth whose
@@ -115,10 +117,11 @@ std::vector<ImplicitLevelPlan> Simulation::implicit_level_plan() const {
     if (!implicit_) return {};
     const std::uint32_t k = params_.implicit.iterations;
     std::vector<ImplicitLevelPlan> plan{{cloth_.particle_count, k}};
-    const bool free = free_first_level(params_);
     if (params_.implicit.multilevel)
-        for (const CoarseLevel& L : implicit_->coarse)
-            plan.push_back({L.cloth.particle_count, coarse_sweeps(k, L.sweep_factor, free && plan.size() == 1)});
+        for (std::size_t l = 0; l < implicit_->coarse.size(); ++l) {
+            const CoarseLevel& L = implicit_->coarse[l];
+            plan.push_back({L.cloth.particle_count, coarse_sweeps(params_, L.sweep_factor, l)});
+        }
     return plan;
 }
 
@@ -329,8 +332,7 @@ template <bool Parallel> void Simulation::multilevel_guess() {
         // The level's sweeps: the cloth's times L.sweep_factor (cook_implicit), at most coarse_iterations_max; the
         // first level of a free cloth half that (free_first_level).
         ImplicitParams level_params = params_.implicit;
-        level_params.iterations =
-            coarse_sweeps(params_.implicit.iterations, L.sweep_factor, l == 0 && free_first_level(params_));
+        level_params.iterations = coarse_sweeps(params_, L.sweep_factor, l);
         L.solver.run<Parallel>({L.x0.data(), L.y0.data(), L.z0.data(), L.x.data(), L.y.data(), L.z.data(),
                                 L.inv_mass.data(), params_.colliders},
                                level_params, h, params_.air_drag);
