@@ -26,6 +26,19 @@ namespace drape::app {
 
 namespace {
 
+/// ", Chebyshev rho R" for the text summary, with what the cloth's sweeps ran with where that differs (few sweeps,
+/// colliders).
+std::string chebyshev_text(const SimulationParams& sp) {
+    if (sp.implicit.chebyshev_rho <= 0.0f) return "";
+    const float used = sp.colliders.empty() ? chebyshev_rho_for(sp.implicit) : 0.0f;
+    std::string t = ", Chebyshev rho " + format_dt(sp.implicit.chebyshev_rho);
+    if (used != sp.implicit.chebyshev_rho)
+        t += used > 0.0f ? " (" + format_dt(used) + " at " + std::to_string(sp.implicit.iterations) + " sweeps)"
+                         : sp.colliders.empty() ? " (off below " + std::to_string(chebyshev_min_iterations) + " sweeps)"
+                                                : std::string(" (off with colliders)");
+    return t;
+}
+
 using clock_type = std::chrono::steady_clock;
 
 std::string hex64(std::uint64_t v) {
@@ -267,6 +280,8 @@ int run_command(const RunOptions& o) {
                          {"max_iterations", sp.implicit.iterations},
                          {"tolerance", sp.implicit.tolerance},
                          {"chebyshev_rho", sp.implicit.chebyshev_rho},
+                         // what the cloth's own sweeps run with: none with colliders, fewer at few sweeps
+                         {"chebyshev_rho_used", sp.colliders.empty() ? chebyshev_rho_for(sp.implicit) : 0.0f},
                          {"fas", sp.implicit.fas},
                          {"multilevel", sp.implicit.multilevel},
                          {"levels", st.levels}, // grids the last step solved: 1 + coarse levels
@@ -326,9 +341,7 @@ int run_command(const RunOptions& o) {
             std::printf("  solver implicit (backward Euler, %s%s), dt %s s (%s; %.3g x the explicit bound %s s), "
                         "%llu steps = %.4g s simulated\n",
                         sp.implicit.method == ImplicitMethod::jacobi ? "Jacobi" : "vertex block descent",
-                        sp.implicit.chebyshev_rho > 0.0f
-                            ? (", Chebyshev rho " + format_dt(sp.implicit.chebyshev_rho)).c_str()
-                            : "",
+                        chebyshev_text(sp).c_str(),
                         format_dt(sp.dt).c_str(), dt_default ? "default: a frame" : o.dt ? "--dt" : "scene's physics.dt",
                         double(sp.dt) / bound.dt_max, format_dt(bound.dt_max).c_str(),
                         static_cast<unsigned long long>(done), sim.time());

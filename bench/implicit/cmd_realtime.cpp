@@ -54,8 +54,14 @@ RunFigures run(Simulation& sim, const Options& opt, bool budgeted) {
         if (!f.full || !f.finite || opt.settle_time <= 0.0) return f;
         const std::size_t settle = static_cast<std::size_t>(std::llround(opt.settle_time / f.dt));
         const double per_step = f.wall / static_cast<double>(done);
-        if (settle > total && (!budgeted || per_step * static_cast<double>(settle) <= opt.explicit_settle_budget))
+        if (settle > total && (!budgeted || per_step * static_cast<double>(settle) <= opt.explicit_settle_budget)) {
+            if (opt.settle_drag > 0.0) {
+                SimulationParams p = sim.params();
+                p.air_drag = static_cast<float>(opt.settle_drag);
+                sim.set_params(p);
+            }
             sim.step(settle - total);
+        }
         if (settle <= total || !budgeted || per_step * static_cast<double>(settle) <= opt.explicit_settle_budget) {
             f.settled_at = sim.time();
             f.settled = positions(sim);
@@ -76,12 +82,14 @@ int cmd_realtime(const Options& opt) {
     rep.threads = opt.threads;
     Table t;
     char title[200];
-    std::snprintf(title, sizeof title, "Real-time factor on the hang scene (wool, 2 cm clips): %g s timed; settled shape at %g s",
-                  opt.duration.value_or(2.0), opt.settle_time);
+    std::snprintf(title, sizeof title,
+                  "Real-time factor on the hang scene (wool, 2 cm clips): %g s timed; settled shape at %g s%s",
+                  opt.duration.value_or(2.0), opt.settle_time,
+                  opt.settle_drag > 0.0 ? (" (air drag " + std::to_string(opt.settle_drag).substr(0, 4) + "/s after the timed run)").c_str() : "");
     t.title = title;
     t.columns = {"N",          "particles",      "solver",       "dt (s)",      "iterations", "strain limit",
                  "timed (s)",  "wall (s)",       "real-time x",  "max strain at t_end", "max strain over the run", "finite",
-                 "last rel. residual", "settled at (s)", "distance to reference (mm)", "quality"};
+                 "last rel. residual", "settled at (s)", "distance to reference (mm)", "rms distance (mm)", "quality"};
     std::vector<std::uint32_t> sizes = opt.sizes.empty() ? std::vector<std::uint32_t>{100, 316, 1000} : opt.sizes;
     for (std::uint32_t n : sizes) {
         BuiltScene scene = hang_scene(n);
@@ -106,7 +114,13 @@ int cmd_realtime(const Options& opt) {
         std::fprintf(stderr, "realtime: N = %u: reference equilibria...\n", n);
         const auto t_ref = std::chrono::steady_clock::now();
         const bool newton = have_newton_reference() && n <= opt.newton_max_n;
-        if (!newton) {
+        if (opt.explicit_reference) {
+            // Explicit Euler from the implicit (else explicit) settled shape, for both.
+            if (!fi.settled.empty()) eq_i = explicit_equilibrium(im, scene.params, opt);
+            else if (!fe.settled.empty()) eq_i = explicit_equilibrium(ex, scene.params, opt);
+            eq_e = eq_i;
+            if (eq_i) rep.notes.push_back("N = " + std::to_string(n) + ": reference equilibrium by " + eq_i->method);
+        } else if (!newton) {
             // One long implicit run from the implicit (else explicit) settled shape, for both.
             if (!fi.settled.empty()) eq_i = reference_equilibrium(im, opt, n);
             else if (!fe.settled.empty()) eq_i = reference_equilibrium(ex, opt, n);
@@ -137,6 +151,7 @@ int cmd_realtime(const Options& opt) {
             const bool implicit = f == &fi;
             const std::optional<Equilibrium>& eq = implicit ? eq_i : eq_e;
             const double dist = eq && !f->settled.empty() ? max_distance(f->settled, eq->x) : NAN;
+            const double rms = eq && !f->settled.empty() ? rms_distance(f->settled, eq->x) : NAN;
             std::string quality;
             if (!f->full) quality = "n/a (short run)";
             else if (!f->finite) quality = "no (not finite)";
@@ -157,7 +172,8 @@ int cmd_realtime(const Options& opt) {
                    txt(f->finite ? "yes" : "no"),
                    implicit ? num(f->relative_residual, "%.2e") : txt("-"),
                    f->settled_at > 0.0 ? num(f->settled_at, "%.3g") : txt("-"),
-                   std::isfinite(dist) ? num(dist * 1000.0, "%.3g") : txt("-"), txt(quality)});
+                   std::isfinite(dist) ? num(dist * 1000.0, "%.3g") : txt("-"),
+                   std::isfinite(rms) ? num(rms * 1000.0, "%.3g") : txt("-"), txt(quality)});
             if (!f->failure.empty())
                 rep.notes.push_back("N = " + std::to_string(n) + " " + f->solver + ": " + f->failure);
         }

@@ -164,6 +164,15 @@ double max_distance(const std::vector<double>& a, const std::vector<double>& b) 
     return m;
 }
 
+double rms_distance(const std::vector<double>& a, const std::vector<double>& b) {
+    double s = 0.0;
+    for (std::size_t i = 0; i + 2 < a.size(); i += 3) {
+        const double dx = a[i] - b[i], dy = a[i + 1] - b[i + 1], dz = a[i + 2] - b[i + 2];
+        s += dx * dx + dy * dy + dz * dz;
+    }
+    return a.size() < 3 ? 0.0 : std::sqrt(s / double(a.size() / 3));
+}
+
 bool have_newton_reference() { return DRAPE_BENCH_NEWTON != 0; }
 
 #if DRAPE_BENCH_NEWTON
@@ -331,6 +340,42 @@ Equilibrium reference_equilibrium(const Simulation& settled, const Options& opt,
                   "the settled shape; the last step moved %.2g m%s)%s",
                   opt.ref_iterations, opt.ref_drag, steps, moved, moved < 1e-5 ? "" : ": not settled",
                   have_newton_reference() ? "" : " - the Eigen Newton reference is not compiled in");
+    eq.method = buf;
+    return eq;
+}
+
+Equilibrium explicit_equilibrium(const Simulation& settled, const SimulationParams& explicit_params, const Options& opt) {
+    SimulationParams p = explicit_params;
+    p.solver = Solver::explicit_euler;
+    p.air_drag = static_cast<float>(opt.ref_drag);
+    const std::size_t n = settled.cloth().particle_count;
+    InitialState st; // the settled shape, at rest
+    st.x.assign(settled.x().begin(), settled.x().end());
+    st.y.assign(settled.y().begin(), settled.y().end());
+    st.z.assign(settled.z().begin(), settled.z().end());
+    st.vx.assign(n, 0.0f);
+    st.vy.assign(n, 0.0f);
+    st.vz.assign(n, 0.0f);
+    Simulation sim(settled.cloth(), st, p);
+    const std::size_t window = std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(0.1 / double(p.dt))));
+    std::vector<double> x = positions(sim);
+    double moved = 0.0;
+    while (sim.time() < opt.ref_seconds) {
+        sim.step(window);
+        std::vector<double> xn = positions(sim);
+        moved = max_distance(xn, x);
+        x = std::move(xn);
+        if (moved < 1e-5) break;
+    }
+    Equilibrium eq;
+    eq.x = x;
+    eq.residual = moved;
+    char buf[300];
+    std::snprintf(buf, sizeof buf,
+                  "explicit run (%s, dt = %.3g s, air drag %.3g/s, %.3g s from the settled shape at rest; the last "
+                  "0.1 s moved %.2g m%s)",
+                  integrator_name(p.integrator), double(p.dt), opt.ref_drag, sim.time(), moved,
+                  moved < 1e-5 ? "" : ": not settled");
     eq.method = buf;
     return eq;
 }

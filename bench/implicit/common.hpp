@@ -29,6 +29,9 @@ struct Options {
     bool fas = false;                      ///< --fas: the multilevel guess's coarse correction (ImplicitParams::fas)
     std::optional<double> duration;        ///< --duration s: realtime's timed run (default 2), rest's run (default 8)
     double settle_time = 10.0;             ///< --settle-time s, the settled shape
+    double settle_drag = 0.0;              ///< --settle-drag 1/s: air drag from the timed run's end on (0: the scene's)
+    bool explicit_reference = false;       ///< --explicit-reference: the equilibrium by explicit Euler (realtime)
+    double ref_seconds = 20.0;             ///< --ref-seconds: the explicit reference's most simulated seconds
     double explicit_budget = 60.0;         ///< --explicit-budget s of wall time an explicit run may take
     double explicit_settle_budget = 300.0; ///< --explicit-settle-budget s of wall time for the explicit settle run
     double explicit_short = 0.05;          ///< --explicit-short s simulated when the full run is over budget
@@ -93,9 +96,14 @@ struct Equilibrium {
     double residual = 0.0;  ///< Newton: |grad E - m g| (N); long run: the last step's max motion (m)
 };
 Equilibrium reference_equilibrium(const Simulation& settled, const Options& opt, std::uint32_t n);
+/// The equilibrium by explicit Euler: `explicit_params` (the scene's, at its default dt) with the air drag raised to
+/// opt.ref_drag, from the settled shape at rest, until 0.1 s moves no particle more than 10 um (or opt.ref_seconds).
+Equilibrium explicit_equilibrium(const Simulation& settled, const SimulationParams& explicit_params, const Options& opt);
 
 /// Max over particles of |a_i - b_i|, m.
 double max_distance(const std::vector<double>& a, const std::vector<double>& b);
+/// Root mean square over particles of |a_i - b_i|, m.
+double rms_distance(const std::vector<double>& a, const std::vector<double>& b);
 
 inline double seconds_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -439,10 +439,11 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     // Chebyshev's extrapolation and contact disagree (it throws points a collider holds back into the air: a cloth
     // resting on the ground bounced 3 cm, measured), so with colliders the sweeps run plain.
     const bool planes = st.plane_c != nullptr;
-    // With few sweeps its extrapolation is left uncorrected (chebyshev_min_iterations): plain sweeps.
-    const bool chebyshev =
-        ip.chebyshev_rho > 0.0f && st.colliders.empty() && !planes && ip.iterations >= chebyshev_min_iterations;
-    const float rho2 = ip.chebyshev_rho * ip.chebyshev_rho;
+    // With few sweeps its extrapolation is left uncorrected (chebyshev_min_iterations: plain sweeps) or cycles
+    // (chebyshev_full_iterations: a smaller rho).
+    const float rho = chebyshev_rho_for(ip);
+    const bool chebyshev = rho > 0.0f && st.colliders.empty() && !planes;
+    const float rho2 = rho * rho;
     const std::size_t blocks = (count + block_particles - 1) / block_particles;
     float omega = 1.0f;
     // x^(k-1) and x^(k-2) of the Chebyshev pass: two sets of arrays whose roles swap after each pass.

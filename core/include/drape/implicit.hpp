@@ -46,12 +46,21 @@ enum class ImplicitMethod : std::uint8_t {
 /// 0.51, 10: 0.29 against 0.45). docs/implicit.md, "Few sweeps without Chebyshev".
 inline constexpr std::uint32_t chebyshev_min_iterations = 7;
 
+/// Below this many sweeps per step Chebyshev's rho is at most chebyshev_few_rho. With rho 0.9 and 7-14 sweeps the
+/// extrapolation of the last sweeps left the resting wool hang in a cycle its air drag could not damp: the bottom
+/// edge flapping by 25-260 mm a step at N = 16-100 (7, 10, 12 sweeps; 13 at N = 32: 75 mm) where from 15 sweeps, or
+/// with rho 0.85 at any count, a particle moves at most 1-6 mm a step at rest (the multilevel guess's own drift).
+/// docs/implicit.md, "Chebyshev at few sweeps".
+inline constexpr std::uint32_t chebyshev_full_iterations = 15;
+inline constexpr float chebyshev_few_rho = 0.85f;
+
 struct ImplicitParams {
     std::uint32_t iterations = 30;  ///< sweeps per step (the most, with a tolerance), 1..1000
     /// Stop early once the sweep residual is below tolerance x the first sweep's (0 = always run `iterations`), 0..1.
     float tolerance = 0.0f;
     /// Chebyshev acceleration's estimate of the sweep's spectral radius, [0, 1); 0 = off. A level whose step runs
-    /// fewer than chebyshev_min_iterations sweeps runs them plain.
+    /// fewer than chebyshev_min_iterations sweeps runs them plain, fewer than chebyshev_full_iterations with at most
+    /// chebyshev_few_rho (chebyshev_rho_for).
     float chebyshev_rho = 0.9f;
     ImplicitMethod method = ImplicitMethod::gauss_seidel;
     /// On a grid or outline cloth of the fabric model: start each step from the same step solved on coarser copies of
@@ -62,6 +71,14 @@ struct ImplicitParams {
     /// to rest at the cloth's own equilibrium rather than the coarse grids'. Off: each level solves its own step.
     bool fas = false;
 };
+
+/// The Chebyshev rho a level runs its `iterations` sweeps with (0: plain sweeps): the asked rho, none below
+/// chebyshev_min_iterations, at most chebyshev_few_rho below chebyshev_full_iterations.
+inline float chebyshev_rho_for(const ImplicitParams& ip) {
+    if (ip.chebyshev_rho <= 0.0f || ip.iterations < chebyshev_min_iterations) return 0.0f;
+    if (ip.iterations < chebyshev_full_iterations && ip.chebyshev_rho > chebyshev_few_rho) return chebyshev_few_rho;
+    return ip.chebyshev_rho;
+}
 
 /// Figures of the last implicit step.
 struct ImplicitStats {
