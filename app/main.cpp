@@ -111,6 +111,11 @@ int main(int argc, char** argv) {
                   "Implicit solver: no multilevel guess, every step solved on the cloth's own grid only; for cloth "
                   "lying folded or crumpled on a collider, where the coarse grids' guess keeps it moving "
                   "(docs/implicit.md); a hanging cloth does not come to rest without it [scene's, multilevel on]");
+    cmd->add_flag("--fas-at-rest", run.fas_at_rest,
+                  "Implicit solver, with the multilevel guess: once the cloth's rms speed has stayed below g dt / 2 for "
+                  "10 steps its coarse levels solve as with --fas (until it exceeds 2 g dt), so it comes to rest at its "
+                  "own equilibrium; never with colliders, self-collision, wind or a grab; at N >= 200 it needs more than "
+                  "10 sweeps [scene's, off]");
     cmd->add_option("--material", run.material,
                     "Material: a fabric preset (silk, cotton_shirting, jersey, linen, wool, denim, ...; see drape "
                     "materials), switching the cloth to the fabric model, or springs (the seeds' spring model with "

@@ -160,7 +160,8 @@ void apply_solver_flags(SceneSpec& spec, const SolverFlags& f) {
     for (const auto& [given, flag] : {std::pair{f.iterations.has_value(), "--iterations"},
                                       {f.tolerance.has_value(), "--tolerance"},
                                       {f.fas, "--fas"},
-                                      {f.single_level, "--single-level"}})
+                                      {f.single_level, "--single-level"},
+                                      {f.fas_at_rest, "--fas-at-rest"}})
         if (given && !implicit)
             throw InvalidInput(std::string(flag) + ": a flag of the implicit solver, but the solver is explicit" + whose +
                                "; add --solver implicit");
@@ -172,6 +173,7 @@ void apply_solver_flags(SceneSpec& spec, const SolverFlags& f) {
     if (f.tolerance) spec.physics.implicit.tolerance = *f.tolerance;
     if (f.fas) spec.physics.implicit.fas = true;
     if (f.single_level) spec.physics.implicit.multilevel = false;
+    if (f.fas_at_rest) spec.physics.implicit.fas_at_rest = true;
     if (f.strain_limit) spec.physics.strain_limit.ratio = *f.strain_limit;
 }
 

@@ -50,10 +50,12 @@ struct SolverFlags {
     std::optional<float> strain_limit;       ///< --strain-limit R, 0..10 (0 = off): the largest stretch
     bool fas = false;                        ///< --fas: the multilevel guess's coarse correction (ImplicitParams::fas)
     bool single_level = false;               ///< --single-level: no multilevel guess (ImplicitParams::multilevel off)
+    bool fas_at_rest = false;                ///< --fas-at-rest: ImplicitParams::fas_at_rest on
 };
 /// Applies them to a scene: --solver implicit switches a Verlet scene to the Euler integrator (the implicit solver
 /// keeps velocities); throws InvalidInput (exit code 2) naming the flag for --integrator verlet with the implicit
-/// solver, and for --iterations, --tolerance, --fas or --single-level when the solver (the flag's or the scene's) is explicit.
+/// solver, and for --iterations, --tolerance, --fas, --single-level or --fas-at-rest when the solver (the flag's or
+/// the scene's) is explicit.
 void apply_solver_flags(SceneSpec& spec, const SolverFlags& flags);
 
 /// A warning for the implicit solver on a cloth it solves on one grid only (no multilevel guess: OBJ meshes, the

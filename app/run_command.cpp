@@ -119,7 +119,8 @@ int run_command(const RunOptions& o) {
                               .integrator = o.integrator,
                               .strain_limit = o.strain_limit,
                               .fas = o.fas,
-                              .single_level = o.single_level});
+                              .single_level = o.single_level,
+                              .fas_at_rest = o.fas_at_rest});
     const bool implicit = spec.physics.solver == Solver::implicit;
     if (o.wind) spec.physics.wind.enabled = true;
     if (o.aero) spec.physics.aero.enabled = true;
@@ -283,6 +284,8 @@ int run_command(const RunOptions& o) {
                          // what the cloth's own sweeps run with: none with colliders, fewer at few sweeps
                          {"chebyshev_rho_used", sp.colliders.empty() ? chebyshev_rho_for(sp.implicit) : 0.0f},
                          {"fas", sp.implicit.fas},
+                         {"fas_at_rest", sp.implicit.fas_at_rest},
+                         {"fas_last_step", st.fas}, // the last step's coarse levels solved with FAS
                          {"multilevel", sp.implicit.multilevel},
                          {"levels", st.levels}, // grids the last step solved: 1 + coarse levels
                          {"method", sp.implicit.method == ImplicitMethod::jacobi ? "jacobi" : "gauss_seidel"}};

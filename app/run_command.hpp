@@ -21,6 +21,7 @@ struct RunOptions {
     std::optional<float> tolerance;          ///< implicit solver: relative residual to stop a step early
     bool fas = false;                        ///< implicit solver: the multilevel guess's coarse correction
     bool single_level = false;               ///< implicit solver: no multilevel guess
+    bool fas_at_rest = false;                ///< implicit solver: FAS once the cloth is at rest
     /// A fabric preset (switches the scene to the fabric model) or "springs" (the seeds' spring model).
     std::optional<std::string> material;
     std::optional<float> stiffness;

@@ -1179,6 +1179,13 @@ void ViewSession::set_multilevel(bool on) {
     warn_about_settings(false);
 }
 
+void ViewSession::set_fas_at_rest(bool on) {
+    SimulationParams p = sim_->params();
+    if (p.implicit.fas_at_rest == on) return;
+    p.implicit.fas_at_rest = on;
+    commit_params(p, "FAS at rest");
+}
+
 void ViewSession::set_iteration_budget(bool on) {
     if (on == budget_on_ || busy("iteration budget")) return;
     const Snapshot before = snapshot();

@@ -274,6 +274,8 @@ class ViewSession {
     void set_chebyshev_rho(float rho);
     /// The implicit solver's multilevel guess on or off (ImplicitParams::multilevel; undoable).
     void set_multilevel(bool on);
+    /// ImplicitParams::fas_at_rest (undoable).
+    void set_fas_at_rest(bool on);
     /// The iteration budget (implicit solver): on, the iterations follow budget_iterations() every
     /// view_budget_frames frames so that the simulation takes about sim_budget_ms() per frame.
     bool iteration_budget() const noexcept { return budget_on_; }

@@ -119,6 +119,7 @@ void expect_same_spec(const SceneSpec& a, const SceneSpec& b, const std::string&
     EXPECT_TRUE(same_bits(p.implicit.chebyshev_rho, q.implicit.chebyshev_rho)) << what;
     EXPECT_EQ(p.implicit.method, q.implicit.method) << what;
     EXPECT_EQ(p.implicit.fas, q.implicit.fas) << what;
+    EXPECT_EQ(p.implicit.fas_at_rest, q.implicit.fas_at_rest) << what;
     EXPECT_EQ(p.implicit.multilevel, q.implicit.multilevel) << what;
     EXPECT_TRUE(same_bits(p.self_collision.thickness, q.self_collision.thickness)) << what;
     EXPECT_TRUE(same_bits(p.self_collision.friction, q.self_collision.friction)) << what;
@@ -254,6 +255,12 @@ TEST(SceneWrite, ImplicitSolverRoundTrips) {
     const std::string single = scene_to_json(s);
     EXPECT_TRUE(has(single, "\"multilevel\": false")) << single;
     expect_same_spec(s, parse_scene(single, "single.json"), "implicit, single level");
+    EXPECT_FALSE(has(text, "\"fas_at_rest\"")) << "the default (off) is left out";
+    s.physics.implicit.fas_at_rest = true;
+    const std::string at_rest = scene_to_json(s);
+    EXPECT_TRUE(has(at_rest, "\"fas_at_rest\": true")) << at_rest;
+    expect_same_spec(s, parse_scene(at_rest, "at_rest.json"), "implicit, FAS at rest");
+    s.physics.implicit.fas_at_rest = false;
     EXPECT_EQ(build_scene(back).params.dt, implicit_default_dt);
     s.dt = 0.02f;
     expect_same_spec(s, parse_scene(scene_to_json(s), "implicit_dt.json"), "implicit with dt");

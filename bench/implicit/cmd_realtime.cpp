@@ -89,21 +89,25 @@ int cmd_realtime(const Options& opt) {
     t.title = title;
     t.columns = {"N",          "particles",      "solver",       "dt (s)",      "iterations", "strain limit",
                  "timed (s)",  "wall (s)",       "real-time x",  "max strain at t_end", "max strain over the run", "finite",
-                 "last rel. residual", "settled at (s)", "distance to reference (mm)", "rms distance (mm)", "quality"};
+                 "last rel. residual", "settled at (s)", "distance to reference (mm)", "rms distance (mm)", "mean offset (mm)", "quality"};
     std::vector<std::uint32_t> sizes = opt.sizes.empty() ? std::vector<std::uint32_t>{100, 316, 1000} : opt.sizes;
     for (std::uint32_t n : sizes) {
         BuiltScene scene = hang_scene(n);
         const std::size_t particles = scene.cloth.particle_count;
         std::fprintf(stderr, "realtime: N = %u (%zu particles): implicit...\n", n, particles);
-        Simulation im(scene.cloth, scene.initial,
-                      implicit_params(scene.params, opt.dt, opt.iterations, opt.rho, ImplicitMethod::gauss_seidel,
-                                      opt.strain_limit, opt.multilevel, opt.fas));
+        SimulationParams ip = implicit_params(scene.params, opt.dt, opt.iterations, opt.rho, ImplicitMethod::gauss_seidel,
+                                              opt.strain_limit, opt.multilevel, opt.fas);
+        ip.implicit.fas_at_rest = opt.fas_at_rest;
+        Simulation im(scene.cloth, scene.initial, ip);
         RunFigures fi = run(im, opt, false);
         std::string plan; // particles x sweeps per step of each level, the cloth first
         for (const ImplicitLevelPlan& l : im.implicit_level_plan())
             plan += (plan.empty() ? "" : ", ") + std::to_string(l.particles) + " x " + std::to_string(l.sweeps);
         std::fprintf(stderr, "realtime: N = %u: levels (particles x sweeps per step) %s\n", n, plan.c_str());
-        fi.solver = !opt.multilevel ? "implicit (single level)" : opt.fas ? "implicit (multilevel, FAS)" : "implicit (multilevel)";
+        fi.solver = !opt.multilevel ? "implicit (single level)"
+                    : opt.fas       ? "implicit (multilevel, FAS)"
+                    : opt.fas_at_rest ? "implicit (multilevel, FAS at rest)"
+                                      : "implicit (multilevel)";
         fi.iterations = opt.iterations;
         std::fprintf(stderr, "realtime: N = %u: explicit...\n", n);
         Simulation ex(scene.cloth, scene.initial, scene.params);
@@ -152,6 +156,7 @@ int cmd_realtime(const Options& opt) {
             const std::optional<Equilibrium>& eq = implicit ? eq_i : eq_e;
             const double dist = eq && !f->settled.empty() ? max_distance(f->settled, eq->x) : NAN;
             const double rms = eq && !f->settled.empty() ? rms_distance(f->settled, eq->x) : NAN;
+            const double offset = eq && !f->settled.empty() ? mean_offset(f->settled, eq->x) : NAN;
             std::string quality;
             if (!f->full) quality = "n/a (short run)";
             else if (!f->finite) quality = "no (not finite)";
@@ -173,7 +178,8 @@ int cmd_realtime(const Options& opt) {
                    implicit ? num(f->relative_residual, "%.2e") : txt("-"),
                    f->settled_at > 0.0 ? num(f->settled_at, "%.3g") : txt("-"),
                    std::isfinite(dist) ? num(dist * 1000.0, "%.3g") : txt("-"),
-                   std::isfinite(rms) ? num(rms * 1000.0, "%.3g") : txt("-"), txt(quality)});
+                   std::isfinite(rms) ? num(rms * 1000.0, "%.3g") : txt("-"),
+                   std::isfinite(offset) ? num(offset * 1000.0, "%.3g") : txt("-"), txt(quality)});
             if (!f->failure.empty())
                 rep.notes.push_back("N = " + std::to_string(n) + " " + f->solver + ": " + f->failure);
         }

@@ -36,6 +36,7 @@ int cmd_rest(const Options& opt) {
                                                                 ImplicitMethod::gauss_seidel, opt.strain_limit,
                                                                 multilevel, fas);
             if (explicit_run) p.integrator = Integrator::symplectic_euler;
+            else p.implicit.fas_at_rest = opt.fas_at_rest;
             p.air_drag = static_cast<float>(opt.ref_drag);
             Simulation sim(scene.cloth, scene.initial, p);
             const std::size_t count = sim.cloth().particle_count;
@@ -44,7 +45,7 @@ int cmd_rest(const Options& opt) {
             const long steps = std::lround(duration / dt), per_second = std::max(1L, std::lround(1.0 / dt));
             std::string guess = explicit_run ? "explicit (euler)"
                                 : fas        ? "multilevel + FAS"
-                                : multilevel ? "multilevel"
+                                : multilevel ? (opt.fas_at_rest ? "multilevel (FAS at rest)" : "multilevel")
                                              : "single level";
             std::fprintf(stderr, "rest: N = %u, %s\n", n, guess.c_str());
             for (long s = 1; s <= steps; ++s) {

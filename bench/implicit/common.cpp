@@ -173,6 +173,14 @@ double rms_distance(const std::vector<double>& a, const std::vector<double>& b) 
     return a.size() < 3 ? 0.0 : std::sqrt(s / double(a.size() / 3));
 }
 
+double mean_offset(const std::vector<double>& a, const std::vector<double>& b) {
+    double d[3] = {0.0, 0.0, 0.0};
+    for (std::size_t i = 0; i + 2 < a.size(); i += 3)
+        for (int k = 0; k < 3; ++k) d[k] += a[i + k] - b[i + k];
+    const double n = a.size() < 3 ? 1.0 : double(a.size() / 3);
+    return std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / n;
+}
+
 bool have_newton_reference() { return DRAPE_BENCH_NEWTON != 0; }
 
 #if DRAPE_BENCH_NEWTON

@@ -27,6 +27,7 @@ struct Options {
     bool multilevel = true;                ///< --single-level turns the implicit solver's multilevel guess off
     bool explicit_rest = false;            ///< --explicit-rest: rest also runs the explicit solver (the equilibrium)
     bool fas = false;                      ///< --fas: the multilevel guess's coarse correction (ImplicitParams::fas)
+    bool fas_at_rest = false;              ///< --fas-at-rest (ImplicitParams::fas_at_rest)
     std::optional<double> duration;        ///< --duration s: realtime's timed run (default 2), rest's run (default 8)
     double settle_time = 10.0;             ///< --settle-time s, the settled shape
     double settle_drag = 0.0;              ///< --settle-drag 1/s: air drag from the timed run's end on (0: the scene's)
@@ -104,6 +105,8 @@ Equilibrium explicit_equilibrium(const Simulation& settled, const SimulationPara
 double max_distance(const std::vector<double>& a, const std::vector<double>& b);
 /// Root mean square over particles of |a_i - b_i|, m.
 double rms_distance(const std::vector<double>& a, const std::vector<double>& b);
+/// |mean over particles of (a_i - b_i)|, m: how far the shape as a whole is displaced.
+double mean_offset(const std::vector<double>& a, const std::vector<double>& b);
 
 inline double seconds_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

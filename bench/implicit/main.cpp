@@ -25,7 +25,8 @@
 // scene's 0.2/s, under which the wool hang still swings at 10 s), so the settled shape is where each solver, as
 // configured, comes to rest; --explicit-reference (realtime) the reference equilibrium by explicit Euler at the
 // scene's dt and --ref-drag from the implicit settled shape, until 0.1 s moves nothing by 10 um or --ref-seconds S
-// (default 20) pass, instead of the long implicit run; --kmax K (convergence, default 300); --csv FILE or
+// (default 20) pass, instead of the long implicit run; --fas-at-rest (realtime, rest) the implicit runs with
+// ImplicitParams::fas_at_rest; --kmax K (convergence, default 300); --csv FILE or
 // --out DIR (convergence's CSV; default ./convergence.csv); --json-out FILE also writes the JSON object there.
 #include <cstdio>
 #include <cstdlib>
@@ -61,7 +62,7 @@ int main(int argc, char** argv) {
     if (argc < 2 || std::strcmp(argv[1], "--help") == 0) {
         std::fprintf(stderr, "usage: drape_implicit realtime|convergence|throughput|rest [--n N,..] [--threads T] [--json] "
                              "[--dt S] [--iterations K] [--rho R] [--strain-limit R] [--single-level] [--fas] [--duration S] [--settle-time S] "
-                             "[--explicit-budget S] [--explicit-settle-budget S] [--explicit-short S] [--newton-max-n N] [--newton-step-max-n N] [--newton-iterations K] [--ref-iterations K] [--ref-steps S] [--ref-drag D] [--ref-seconds S] [--settle-drag D] [--explicit-reference] "
+                             "[--explicit-budget S] [--explicit-settle-budget S] [--explicit-short S] [--newton-max-n N] [--newton-step-max-n N] [--newton-iterations K] [--ref-iterations K] [--ref-steps S] [--ref-drag D] [--ref-seconds S] [--settle-drag D] [--explicit-reference] [--fas-at-rest] "
                              "[--kmax K] [--csv FILE | --out DIR] [--json-out FILE] [--scene S] [--explicit-rest] (rest)\n");
         return 2;
     }
@@ -107,6 +108,7 @@ int main(int argc, char** argv) {
         else if (s == "--ref-seconds") opt.ref_seconds = number("--ref-seconds", value(), 0.1, 600);
         else if (s == "--settle-drag") opt.settle_drag = number("--settle-drag", value(), 0, 100);
         else if (s == "--explicit-reference") opt.explicit_reference = true;
+        else if (s == "--fas-at-rest") opt.fas_at_rest = true;
         else if (s == "--ref-iterations")
             opt.ref_iterations = static_cast<std::uint32_t>(number("--ref-iterations", value(), 1, 1000));
         else if (s == "--kmax") opt.kmax = static_cast<std::uint32_t>(number("--kmax", value(), 1, 1000));

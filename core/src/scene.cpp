@@ -1065,6 +1065,7 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
         im.fail(im.at("chebyshev_rho"), "= 1 is outside the allowed range [0, 1) (0 = no acceleration)");
     p.implicit.chebyshev_rho = static_cast<float>(rho);
     p.implicit.fas = im.boolean("fas", p.implicit.fas);
+    p.implicit.fas_at_rest = im.boolean("fas_at_rest", p.implicit.fas_at_rest);
     p.implicit.multilevel = im.boolean("multilevel", p.implicit.multilevel);
     p.implicit.method = im.text("method", {"gauss_seidel", "jacobi"}, "gauss_seidel") == "jacobi"
                             ? ImplicitMethod::jacobi

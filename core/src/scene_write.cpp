@@ -315,6 +315,7 @@ std::string to_json(const SceneSpec& s, const SceneState* state, const std::file
         .add("chebyshev_rho", num(p.implicit.chebyshev_rho))
         .add("method", str(p.implicit.method == ImplicitMethod::jacobi ? "jacobi" : "gauss_seidel"));
     if (p.implicit.fas) im.add("fas", boolean(true));
+    if (p.implicit.fas_at_rest) im.add("fas_at_rest", boolean(true));
     if (!p.implicit.multilevel) im.add("multilevel", boolean(false));
     ph.add("implicit", im.object());
     ph.add("wind", wind.object()).add("aero", aero.object()).add("strain_limit", sl.object());

@@ -299,6 +299,7 @@ class Simulation {
     /// Cooks the implicit solver's graph and scratch (when first chosen).
     void cook_implicit();
     template <bool Parallel> void multilevel_guess();
+    template <bool Parallel> bool fas_at_rest();
     /// The implicit step's contact re-solve: the step's sweeps again from where self-collision left the cloth, each
     /// pushed particle held on its side of its contact plane, then the velocities (implicit_step.cpp).
     template <bool Parallel> void implicit_contact_resolve();
