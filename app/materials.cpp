@@ -165,10 +165,11 @@ void apply_solver_flags(SceneSpec& spec, const SolverFlags& f) {
         if (given && !implicit)
             throw InvalidInput(std::string(flag) + ": a flag of the implicit solver, but the solver is explicit" + whose +
                                "; add --solver implicit");
-    if (f.fas && (f.single_level || !spec.physics.implicit.multilevel))
-        throw InvalidInput(std::string("--fas: the coarse correction of the multilevel guess, but the multilevel guess "
-                                       "is off") + (f.single_level ? " (--single-level)" : " (the scene's "
-                                       "physics.implicit.multilevel)") + "; drop one of them");
+    for (const auto& [given, flag] : {std::pair{f.fas, "--fas"}, {f.fas_at_rest, "--fas-at-rest"}})
+        if (given && (f.single_level || !spec.physics.implicit.multilevel))
+            throw InvalidInput(std::string(flag) + ": the coarse correction of the multilevel guess, but the multilevel "
+                               "guess is off" + (f.single_level ? " (--single-level)" : " (the scene's "
+                               "physics.implicit.multilevel)") + "; drop one of them");
     if (f.iterations) spec.physics.implicit.iterations = *f.iterations;
     if (f.tolerance) spec.physics.implicit.tolerance = *f.tolerance;
     if (f.fas) spec.physics.implicit.fas = true;

@@ -199,10 +199,11 @@ int run_command(const RunOptions& o) {
     Simulation& sim = *built;
     // --fas changes the coarse levels' solve; a cloth without coarse levels (a T-shirt, mask or OBJ mesh, the springs
     // model, a small grid) would run exactly as without it.
-    if (o.fas && sim.implicit_levels() == 1)
-        throw InvalidInput("--fas: the coarse correction of the multilevel guess, but this cloth has no coarse levels "
-                           "(only square grids of the fabric model, 10 x 10 and up, and outline cloths of the fabric model have "
-                           "them); drop --fas");
+    for (const auto& [given, flag] : {std::pair{o.fas, "--fas"}, {o.fas_at_rest, "--fas-at-rest"}})
+        if (given && sim.implicit_levels() == 1)
+            throw InvalidInput(std::string(flag) + ": the coarse correction of the multilevel guess, but this cloth "
+                               "has no coarse levels (only square grids of the fabric model, 10 x 10 and up, and "
+                               "outline cloths of the fabric model have them); drop " + flag);
     for (const std::string& w : {single_level_implicit_warning(sim), self_collision_thickness_warning(sim),
                                  started_inside_warning(sim)})
         if (!w.empty()) std::cerr << "drape run: warning: " << w << "\n";

@@ -96,6 +96,11 @@ expect_error "--staged: a choice of the explicit solver" run --solver implicit -
 expect_error "--dt: 1e-05 s is below the implicit solver's shortest step, 1e-4 s" run --solver implicit --dt 1e-5 --steps 1
 expect_error "but the multilevel guess is off (--single-level)" run --solver implicit --fas --single-level --steps 1
 expect_error "but this cloth has no coarse levels" run --scene tshirt --solver implicit --fas --steps 1
+expect_error "--fas-at-rest: the coarse correction of the multilevel guess, but the multilevel guess is off (--single-level)" \
+    run --solver implicit --fas-at-rest --single-level --steps 1
+expect_error "--fas-at-rest: the coarse correction of the multilevel guess, but this cloth has no coarse levels" \
+    run --scene tshirt --solver implicit --fas-at-rest --steps 1
+expect_error "--fas-at-rest: a flag of the implicit solver, but the solver is explicit" run --fas-at-rest
 
 expect_error "--export-obj: an empty path" run --steps 1 --export-obj ''
 expect_error "--sim-seconds 10 at dt = 1e-09 s needs 1e+10 substeps (max 1e9)" run --dt 1e-9 --sim-seconds 10
