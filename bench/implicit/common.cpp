@@ -248,6 +248,23 @@ NewtonOut newton_minimise(const StepProblem& p, const std::vector<double>& start
     return out;
 }
 
+namespace {
+/// Steps `sim` `per_check` steps at a time while more() until a check moves no particle more than 10 um; x ends as
+/// the positions, and the last check's largest motion (m) is returned.
+template <class More> double step_until_still(Simulation& sim, std::size_t per_check, std::vector<double>& x, More more) {
+    x = positions(sim);
+    double moved = 0.0;
+    while (more()) {
+        sim.step(per_check);
+        std::vector<double> xn = positions(sim);
+        moved = max_distance(xn, x);
+        x = std::move(xn);
+        if (moved < 1e-5) break;
+    }
+    return moved;
+}
+} // namespace
+
 Equilibrium reference_equilibrium(const Simulation& settled, const Options& opt, std::uint32_t n) {
     Equilibrium eq;
 #if !DRAPE_BENCH_NEWTON
@@ -329,18 +346,12 @@ Equilibrium reference_equilibrium(const Simulation& settled, const Options& opt,
                                          ImplicitMethod::gauss_seidel, 0.0f, true);
     p.air_drag = static_cast<float>(opt.ref_drag);
     Simulation sim = restart(settled, p);
-    std::vector<double> x = positions(sim);
-    double moved = 0.0;
     int steps = 0;
-    while (steps < opt.ref_steps) {
-        sim.step(1);
+    const double moved = step_until_still(sim, 1, eq.x, [&] {
+        if (steps == opt.ref_steps) return false;
         ++steps;
-        std::vector<double> xn = positions(sim);
-        moved = max_distance(xn, x);
-        x = std::move(xn);
-        if (moved < 1e-5) break;
-    }
-    eq.x = x;
+        return true;
+    });
     eq.residual = moved;
     char buf[300];
     std::snprintf(buf, sizeof buf,
@@ -366,17 +377,8 @@ Equilibrium explicit_equilibrium(const Simulation& settled, const SimulationPara
     st.vz.assign(n, 0.0f);
     Simulation sim(settled.cloth(), st, p);
     const std::size_t window = std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(0.1 / double(p.dt))));
-    std::vector<double> x = positions(sim);
-    double moved = 0.0;
-    while (sim.time() < opt.ref_seconds) {
-        sim.step(window);
-        std::vector<double> xn = positions(sim);
-        moved = max_distance(xn, x);
-        x = std::move(xn);
-        if (moved < 1e-5) break;
-    }
     Equilibrium eq;
-    eq.x = x;
+    const double moved = step_until_still(sim, window, eq.x, [&] { return sim.time() < opt.ref_seconds; });
     eq.residual = moved;
     char buf[300];
     std::snprintf(buf, sizeof buf,
