@@ -364,6 +364,23 @@ TEST(Implicit, FasComesToRestOnTheExplicitEquilibrium) {
         // 8.3 / 10.7 / 40 mm: the free corners' folds, which can settle either way
         EXPECT_LT(distance, variant == 0 ? 1e-2 : 2e-2) << variant;
     }
+    // FAS at rest's speed test sums blocks in block order: the same bits serially and at any worker count (72 x 72:
+    // 5 blocks), switched on by the end.
+    const SceneBuild big = build_hang_scene(fabric_hang(72));
+    auto run = [&](int workers, bool serial) {
+        Workers arena(workers);
+        return arena.run([&] {
+            SimulationParams p = implicit_params(1.0f / 30.0f, 10);
+            p.air_drag = 5.0f;
+            p.implicit.fas_at_rest = true;
+            Simulation sim(big.cloth, big.initial, p);
+            serial ? sim.step_serial(120) : sim.step(120);
+            EXPECT_TRUE(sim.implicit_stats().fas) << workers << " workers";
+            return sim.checksum();
+        });
+    };
+    const std::uint64_t serial = run(1, true);
+    for (int w : {2, 3}) EXPECT_EQ(serial, run(w, false)) << w << " workers";
 }
 
 // Chebyshev at few sweeps (chebyshev_rho_for): with rho 0.9 and 7 or 10 sweeps a step, the resting wool hang under
