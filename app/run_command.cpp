@@ -30,7 +30,7 @@ namespace {
 /// colliders).
 std::string chebyshev_text(const SimulationParams& sp) {
     if (sp.implicit.chebyshev_rho <= 0.0f) return "";
-    const float used = sp.colliders.empty() ? chebyshev_rho_for(sp.implicit) : 0.0f;
+    const float used = chebyshev_rho_used(sp);
     std::string t = ", Chebyshev rho " + format_dt(sp.implicit.chebyshev_rho);
     if (used != sp.implicit.chebyshev_rho)
         t += used > 0.0f ? " (" + format_dt(used) + " at " + std::to_string(sp.implicit.iterations) + " sweeps)"
@@ -282,8 +282,7 @@ int run_command(const RunOptions& o) {
                          {"max_iterations", sp.implicit.iterations},
                          {"tolerance", sp.implicit.tolerance},
                          {"chebyshev_rho", sp.implicit.chebyshev_rho},
-                         // what the cloth's own sweeps run with: none with colliders, fewer at few sweeps
-                         {"chebyshev_rho_used", sp.colliders.empty() ? chebyshev_rho_for(sp.implicit) : 0.0f},
+                         {"chebyshev_rho_used", chebyshev_rho_used(sp)}, // the cloth's own sweeps
                          {"fas", sp.implicit.fas},
                          {"fas_at_rest", sp.implicit.fas_at_rest},
                          {"fas_last_step", st.fas}, // the last step's coarse levels solved with FAS

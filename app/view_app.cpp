@@ -722,8 +722,7 @@ void Viewer::print_stats_json() const {
                          {"last_step_iterations", s.implicit_stats().iterations},
                          {"relative_residual", s.implicit_stats().relative_residual},
                          {"chebyshev_rho", s.params().implicit.chebyshev_rho},
-                         {"chebyshev_rho_used",
-                          s.params().colliders.empty() ? chebyshev_rho_for(s.params().implicit) : 0.0f},
+                         {"chebyshev_rho_used", chebyshev_rho_used(s.params())},
                          {"tolerance", s.params().implicit.tolerance},
                          {"budget", session_->iteration_budget()},
                          {"budget_ms", session_->sim_budget_ms()}};

@@ -43,9 +43,7 @@ struct ImplicitSolver {
     std::vector<std::uint32_t> piece;
     std::vector<std::uint8_t> piece_held;
     std::uint32_t slow_steps = 0; ///< steps in a row with an rms speed below fas_rest_on g h
-    std::size_t movable = 0;      ///< particles with mass (fas_at_rest's rms speed), counted when cooked
-    bool fas_at_rest = false;     ///< ImplicitParams::fas_at_rest engaged
-    bool fas_step = false;        ///< the last step's coarse levels solved with FAS
+    bool at_rest = false;         ///< ImplicitParams::fas_at_rest engaged
 };
 
 } // namespace drape

@@ -206,8 +206,6 @@ void Simulation::cook_implicit() {
                                           &solver->res_y, &solver->res_z})
                 a->assign(cloth_.particle_count, 0.0f);
             solver->block_dot.assign(cloth_.block_count(), 0.0);
-            solver->movable = static_cast<std::size_t>(
-                std::count_if(cloth_.inv_mass.begin(), cloth_.inv_mass.end(), [](float w) { return w != 0.0f; }));
         }
     }
     implicit_ = std::move(solver);
@@ -221,11 +219,11 @@ template <bool Parallel> bool Simulation::fas_at_rest() {
     if (!params_.implicit.fas_at_rest || !params_.colliders.empty() || params_.self_collision.thickness > 0.0f ||
         params_.wind.enabled || params_.aero.enabled || grabbed_ != SIZE_MAX || !(gh > 0.0)) {
         is.slow_steps = 0;
-        return is.fas_at_rest = false;
+        return is.at_rest = false;
     }
-    // The root mean square speed of the movable particles (block sums added in block order: the same bits at any
-    // worker count). Not the fastest particle: at N = 316 a few next to the clips kept 0.18 m/s at rest (the plain
-    // guess's drift against the strain limit), which held FAS off for good.
+    // The root mean square speed over the particles, fixed ones counting as still (block sums added in block order:
+    // the same bits at any worker count). Not the fastest particle: at N = 316 a few next to the clips kept 0.18 m/s
+    // at rest (the plain guess's drift against the strain limit), which held FAS off for good.
     const StateBuffer& a = buffers_[current_];
     const std::size_t n = cloth_.particle_count;
     for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
@@ -237,15 +235,15 @@ template <bool Parallel> bool Simulation::fas_at_rest() {
     });
     double sum = 0.0;
     for (double m : is.block_dot) sum += m;
-    const double v = std::sqrt(sum / double(std::max<std::size_t>(1, is.movable))) / gh;
+    const double v = std::sqrt(sum / double(std::max<std::size_t>(1, n))) / gh;
     is.slow_steps = v < fas_rest_on ? is.slow_steps + 1 : 0;
-    if (is.fas_at_rest) is.fas_at_rest = v < fas_rest_off;
-    else is.fas_at_rest = is.slow_steps >= fas_rest_steps;
-    return is.fas_at_rest;
+    is.at_rest = is.at_rest ? v < fas_rest_off : is.slow_steps >= fas_rest_steps;
+    return is.at_rest;
 }
 
-/// Step 2 above: fills buffer B's positions (holding the fine initial guess) with the multilevel guess.
-template <bool Parallel> void Simulation::multilevel_guess() {
+/// Step 2 above: fills buffer B's positions (holding the fine initial guess) with the multilevel guess; returns whether
+/// its coarse levels solved with FAS.
+template <bool Parallel> bool Simulation::multilevel_guess() {
     ImplicitSolver& is = *implicit_;
     const StateBuffer& a = buffers_[current_];
     StateBuffer& b = buffers_[1 - current_];
@@ -257,7 +255,6 @@ template <bool Parallel> void Simulation::multilevel_guess() {
     const float wind_x = params_.wind.strength * static_cast<float>(std::sin(10.0 * t));
     const float wind_phase = static_cast<float>(std::fmod(10.0 * t + cloth_.origin[2], 2.0 * M_PI));
     const bool fas = params_.implicit.fas || fas_at_rest<Parallel>();
-    is.fas_step = fas;
     if (fas) {
         // The cloth's force residual at x^n (grad E - M a_ext: zero at rest), restricted level by level.
         float* rx = is.res_x.data();
@@ -392,7 +389,7 @@ template <bool Parallel> void Simulation::multilevel_guess() {
     };
     if (!fas) {
         add(1.0f);
-        return;
+        return false;
     }
     // The slope of the cloth's G along the correction c at the guess and at guess + c; secant step in [0, 1].
     auto slope = [&]() {
@@ -413,10 +410,11 @@ template <bool Parallel> void Simulation::multilevel_guess() {
     add(1.0f);
     if (d0 >= 0.0) { // not a descent direction
         add(-1.0f);
-        return;
+        return true;
     }
     const double d1 = slope();
     if (d1 > 0.0) add(static_cast<float>(d0 / (d0 - d1)) - 1.0f);
+    return true;
 }
 
 template <bool Parallel> void Simulation::implicit_step() {
@@ -530,14 +528,14 @@ template <bool Parallel> void Simulation::implicit_step() {
 
     // 2. The multilevel guess.
     const bool multilevel = params_.implicit.multilevel && !is.coarse.empty();
-    if (multilevel) multilevel_guess<Parallel>();
+    const bool fas = multilevel && multilevel_guess<Parallel>();
 
     // 3. Sweeps.
     implicit_stats_ = is.fine.run<Parallel>({a.x.data(), a.y.data(), a.z.data(), b.x.data(), b.y.data(), b.z.data(),
                                              inv_mass, params_.colliders},
                                             params_.implicit, h, params_.air_drag);
     implicit_stats_.levels = multilevel ? static_cast<std::uint32_t>(1 + is.coarse.size()) : 1;
-    implicit_stats_.fas = multilevel && is.fas_step;
+    implicit_stats_.fas = fas;
 
     implicit_velocities<Parallel>();
 }

@@ -126,6 +126,11 @@ struct SimulationParams {
     SelfCollision self_collision; ///< off by default (thickness 0)
 };
 
+/// The Chebyshev rho the cloth's own implicit sweeps run with: chebyshev_rho_for, none with colliders (vbd.cpp).
+inline float chebyshev_rho_used(const SimulationParams& p) {
+    return p.colliders.empty() ? chebyshev_rho_for(p.implicit) : 0.0f;
+}
+
 /// Hot state: one buffer of the double-buffered SoA arrays. u, v, w hold velocities (symplectic Euler) or the
 /// previous positions (Verlet).
 struct StateBuffer {
@@ -298,7 +303,7 @@ class Simulation {
     template <bool Parallel> void implicit_step();
     /// Cooks the implicit solver's graph and scratch (when first chosen).
     void cook_implicit();
-    template <bool Parallel> void multilevel_guess();
+    template <bool Parallel> bool multilevel_guess();
     template <bool Parallel> bool fas_at_rest();
     /// The implicit step's contact re-solve: the step's sweeps again from where self-collision left the cloth, each
     /// pushed particle held on its side of its contact plane, then the velocities (implicit_step.cpp).
