@@ -182,7 +182,7 @@ int main(int argc, char** argv) {
     view_cmd->add_option("--material", view.material,
                          "A fabric preset (see drape materials) or springs, instead of the scene's material");
     view_cmd->add_option("--size", view.size,
-                         "Grid scenes: particles per side N (N x N) [hang: 64, others: the scene's]; tshirt and "
+                         "Grid scenes: particles per side N (N x N) [the built-in hang: 64, scene files and others: their own]; tshirt and "
                          "outline cloths: cells per metre [10, 1000] (an outline's spacing 1 / N m)")
         ->check(in_range<std::uint32_t>(2, 2048));
     view_cmd->add_option("--threads", view.threads, "Worker threads (default: all hardware threads)")

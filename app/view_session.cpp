@@ -153,6 +153,15 @@ bool same_figures(const Fabric& a, const Fabric& b) noexcept {
            a.bend_u == b.bend_u && a.bend_v == b.bend_v && a.damping == b.damping;
 }
 
+namespace {
+/// The viewer's own size for the built-in hang (view_default_hang_size). A scene file keeps its own grid, whatever
+/// its "scene" name: a file naming itself "hang" with n = 100 opened at 64 x 64 before.
+std::optional<std::uint32_t> view_default_size(const std::string& name_or_path, const SceneSpec& spec) {
+    if (name_or_path == "hang" && spec.cloth == ClothType::grid) return view_default_hang_size;
+    return std::nullopt;
+}
+} // namespace
+
 ViewSession::ViewSession(const std::string& scene, std::optional<std::uint32_t> size, int threads,
                          std::optional<int> substeps, const std::optional<std::string>& material,
                          const SolverFlags& solver, std::optional<double> dt) {
@@ -174,7 +183,7 @@ ViewSession::ViewSession(const std::string& scene, std::optional<std::uint32_t> 
         auto_substeps_ = false;
         substeps_ = std::clamp(*substeps, 1, view_max_substeps);
     }
-    if (!size && spec.cloth == ClothType::grid && spec.name == "hang") size = view_default_hang_size;
+    if (!size) size = view_default_size(scene, spec);
     Snapshot target = settings_for(std::move(spec), size);
     // The first build runs here (there is no old cloth to show meanwhile); memory is checked first.
     check_scene_memory(sized_spec(target.spec, target.size),
@@ -793,8 +802,7 @@ void ViewSession::set_scene(const std::string& name_or_path) {
         post(MessageLevel::warning, "refused: " + name_or_path + ": " + e.what());
         return;
     }
-    std::optional<std::uint32_t> size;
-    if (spec.cloth == ClothType::grid && spec.name == "hang") size = view_default_hang_size;
+    const std::optional<std::uint32_t> size = view_default_size(name_or_path, spec);
     Request r;
     r.what = "scene " + name_or_path;
     try {

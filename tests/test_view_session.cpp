@@ -527,7 +527,7 @@ TEST(ViewSession, WorkersRunTheRequestedCount) {
 TEST(ViewSession, OpensSceneFilesInTheBackgroundAndRefusesBadOnes) {
     const std::string dir = ::testing::TempDir();
     const std::string good = dir + "/drape_view_open.json", bad = dir + "/drape_view_bad.json",
-                      overflow = dir + "/drape_view_overflow.json";
+                      overflow = dir + "/drape_view_overflow.json", named_hang = dir + "/drape_view_hang.json";
     {
         FILE* f = std::fopen(good.c_str(), "w");
         ASSERT_NE(f, nullptr);
@@ -540,6 +540,10 @@ TEST(ViewSession, OpensSceneFilesInTheBackgroundAndRefusesBadOnes) {
         f = std::fopen(overflow.c_str(), "w");
         ASSERT_NE(f, nullptr);
         std::fputs(R"({"scene": "overflow", "cloth": {"type": "grid", "n": 1e400}})", f);
+        std::fclose(f);
+        f = std::fopen(named_hang.c_str(), "w");
+        ASSERT_NE(f, nullptr);
+        std::fputs(R"({"scene": "hang", "cloth": {"type": "grid", "n": 12}})", f);
         std::fclose(f);
     }
     ViewSession s(16, 1, std::nullopt);
@@ -566,9 +570,16 @@ TEST(ViewSession, OpensSceneFilesInTheBackgroundAndRefusesBadOnes) {
     s.wait();
     EXPECT_EQ(s.scene().name, "hang");
     EXPECT_EQ(s.sim().cloth().particle_count, 256u);
+    s.set_scene(named_hang); // a file keeps its own grid: the viewer's 64 x 64 is the built-in hang's only
+    s.wait();
+    EXPECT_EQ(s.sim().cloth().particle_count, 144u);
+    s.set_scene("hang");
+    s.wait();
+    EXPECT_EQ(s.sim().cloth().particle_count, std::size_t(view_default_hang_size) * view_default_hang_size);
     std::remove(good.c_str());
     std::remove(bad.c_str());
     std::remove(overflow.c_str());
+    std::remove(named_hang.c_str());
 }
 
 TEST(ViewSessionFabric, SceneFabricIsShownWithItsDerivedValues) {
