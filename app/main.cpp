@@ -235,6 +235,9 @@ int main(int argc, char** argv) {
     view_cmd->add_flag("--no-ui", no_ui, "Hide the panels and the stats overlay (Tab toggles them)");
     view_cmd->add_flag("--full-mesh", view.full_mesh,
                        "Draw every triangle (default: grids finer than 256 x 256 are drawn at a coarser level of detail)");
+    view_cmd->add_flag("--pixel-lighting", view.pixel_lighting,
+                       "Light every pixel (default: triangles under 4 pixels across on screen are lit at their "
+                       "vertices)");
     view_cmd->add_option("--camera-yaw", view.camera_yaw_deg,
                          "Camera angle around the vertical, degrees: 0 looks from +z (a garment's front), 90 from +x, "
                          "180 from behind [default: the scene's view, front-right]")

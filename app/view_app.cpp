@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <ctime>
 #include <iostream>
+#include <span>
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
@@ -99,6 +100,7 @@ Viewer::Viewer(const ViewOptions& options) : options_(options) {
 #endif
     scripted_mouse = options.demo_grab;
     full_mesh_ = options.full_mesh;
+    pixel_lighting_ = options.pixel_lighting;
     shading_.strain_colours = options.strain_colours;
     show_help_ = options.key_help;
     window_ = render::open_window(options.width, options.height, "drape - cloth viewer", true);
@@ -207,9 +209,12 @@ void Viewer::sync_gpu() {
         const Simulation& sim = session_->sim();
         const std::uint32_t columns = sim.cloth().grid ? sim.cloth().grid->columns : 0;
         const std::uint32_t rows = sim.cloth().grid ? sim.cloth().grid->rows : 0;
-        renderer_ = std::make_unique<render::ClothRenderer>(sim.cloth().triangles, sim.cloth().particle_count,
-                                                            session_->publisher().plane_floats(), columns,
-                                                            rows, full_mesh_);
+        const std::size_t n = sim.cloth().particle_count;
+        const StateBuffer& state = sim.state();
+        renderer_ = std::make_unique<render::ClothRenderer>(
+            sim.cloth().triangles, n, session_->publisher().plane_floats(), columns, rows, full_mesh_,
+            std::span<const float>(state.x.data(), n), std::span<const float>(state.y.data(), n),
+            std::span<const float>(state.z.data(), n));
         gpu_full_mesh_ = full_mesh_;
         gpu_generation_ = session_->generation();
         gpu_markers_ = 0;
@@ -523,7 +528,9 @@ void Viewer::draw_scene() {
     stage_->draw_background();
     glEnable(GL_DEPTH_TEST);
     colliders_->draw(vp, camera_.eye(), shading_.light_position);
-    renderer_->draw_cloth(vp, camera_.eye(), shading_);
+    // Pixels per metre at the camera's target: the screen scale that decides per-vertex or per-pixel lighting.
+    const float ppm = float(fh) / (2.0f * camera_.distance * std::tan(0.5f * camera_.fov_y_deg * 0.01745329f));
+    renderer_->draw_cloth(vp, camera_.eye(), shading_, ppm, pixel_lighting_);
     if (show_ground_) stage_->draw_ground(vp, camera_.eye());
     int ww = 1, wh = 1;
     glfwGetWindowSize(window_, &ww, &wh);
@@ -755,6 +762,8 @@ void Viewer::print_stats_json() const {
     j["triangles_drawn"] = renderer_->triangle_count();
     j["triangles"] = s.cloth().triangles.size() / 3;
     j["lod_stride"] = renderer_->lod_stride();
+    j["lighting"] = renderer_->lit_per_vertex() ? "vertex" : "pixel";
+    j["drawn_edge_px"] = renderer_->drawn_edge_px();
     j["vsync"] = options_.vsync;
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window_, &fw, &fh);

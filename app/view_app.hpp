@@ -153,6 +153,7 @@ class Viewer {
     bool show_help_ = false;
     bool show_ground_ = true;
     bool full_mesh_ = false;
+    bool pixel_lighting_ = false; ///< light every pixel, whatever the triangles' size on screen
     bool gpu_full_mesh_ = false;
     int ui_size_ = 64;
     float ui_node_mass_ = 0.0f;

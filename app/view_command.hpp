@@ -30,6 +30,7 @@ struct ViewOptions {
     bool stats_json = false;  ///< one JSON object on stdout at exit
     bool ui = true;           ///< panels and overlay
     bool full_mesh = false;   ///< draw every triangle (no level of detail for fine grids)
+    bool pixel_lighting = false; ///< light every pixel (default: per vertex where triangles are under 4 px)
     std::optional<float> camera_yaw_deg; ///< camera around the vertical, degrees: 0 from +z (the front), 180 the back
     // Hidden automation hooks (documentation screenshots, tests).
     bool panels_open = false; ///< every panel section expanded

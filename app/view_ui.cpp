@@ -458,6 +458,11 @@ void Viewer::ui_camera() {
         ImGui::TextDisabled("drawing every %u-th row: %s of %s triangles", renderer_->lod_stride(),
                             grouped(renderer_->triangle_count()).c_str(),
                             grouped(session_->sim().cloth().triangles.size() / 3).c_str());
+    ImGui::Checkbox("light every pixel", &pixel_lighting_);
+    help_marker("Off: a cloth whose drawn triangles are under 4 pixels across on screen is lit at its vertices "
+                "(the same colours, interpolated; much cheaper in software GL). On: lit per pixel at any size.");
+    ImGui::TextDisabled("triangles %.1f px across: lit per %s", double(renderer_->drawn_edge_px()),
+                        renderer_->lit_per_vertex() ? "vertex" : "pixel");
     ImGui::TextDisabled("distance %.2f m, yaw %.0f deg, pitch %.0f deg", double(camera_.distance),
                         double(camera_.yaw) * 57.2958, double(camera_.pitch) * 57.2958);
 }

@@ -83,6 +83,78 @@ void main() {
 }
 )";
 
+// Lighting per vertex, for cloths whose drawn triangles are a few pixels across (ClothRenderer::draw_cloth): the
+// same Blinn-Phong colour as cloth_fs, checker and strain colours included, computed at the vertices for both sides
+// and interpolated; the fragment shader only picks the side. llvmpipe's cost of a fragment grows with what its
+// shader computes, and small triangles shade many fragments each (docs/viewer.md, "Drawing cost").
+const char* const cloth_vertex_lit_vs = R"(#version 450 core
+layout(location = 0) in float px;
+layout(location = 1) in float py;
+layout(location = 2) in float pz;
+layout(location = 3) in float nx;
+layout(location = 4) in float ny;
+layout(location = 5) in float nz;
+layout(location = 6) in float strain;
+uniform mat4 u_view_projection;
+uniform int u_base_vertex;
+uniform int u_columns;
+uniform vec3 u_eye;
+uniform vec3 u_light_position;
+uniform float u_light_intensity;
+uniform vec3 u_front;
+uniform vec3 u_back;
+uniform float u_ambient;
+uniform float u_diffuse;
+uniform float u_specular;
+uniform float u_shininess;
+uniform float u_checker;
+uniform float u_strain_max;
+const vec3 strain_stops[5] = vec3[5](STRAIN_STOPS);
+out vec3 v_front_colour;
+out vec3 v_back_colour;
+vec3 strain_colour(float t) {
+    float u = clamp(t, 0.0, 1.0) * 4.0;
+    int i = min(int(u), 3);
+    return pow(mix(strain_stops[i], strain_stops[i + 1], u - float(i)), vec3(2.2));
+}
+vec3 lit(vec3 n, vec3 l, vec3 h, vec3 base) {
+    float ndl = max(dot(n, l), 0.0);
+    float spec = ndl > 0.0 ? pow(max(dot(n, h), 0.0), u_shininess) : 0.0;
+    vec3 c = u_ambient * base + u_light_intensity * (u_diffuse * ndl * base + vec3(u_specular * spec));
+    return pow(clamp(c, 0.0, 1.0), vec3(1.0 / 2.2));
+}
+void main() {
+    vec3 p = vec3(px, py, pz);
+    vec3 n = normalize(vec3(nx, ny, nz));
+    vec3 front = u_front;
+    vec3 back = u_back;
+    if (u_strain_max > 0.0) {
+        front = back = strain_colour(strain / u_strain_max);
+    } else if (u_checker > 0.0) {
+        int k = gl_VertexID - u_base_vertex;
+        vec2 grid = vec2(k % u_columns, k / u_columns) / float(max(u_columns - 1, 1));
+        vec2 cell = floor(grid * 16.0 - 1e-4);
+        float dark = 1.0 - u_checker * mod(cell.x + cell.y, 2.0);
+        front *= dark;
+        back *= dark;
+    }
+    vec3 l = normalize(u_light_position - p);
+    vec3 h = normalize(l + normalize(u_eye - p));
+    v_front_colour = lit(n, l, h, front);
+    v_back_colour = lit(-n, l, h, back);
+    gl_Position = u_view_projection * vec4(p, 1.0);
+}
+)";
+
+const char* const cloth_vertex_lit_fs = R"(#version 450 core
+in vec3 v_front_colour;
+in vec3 v_back_colour;
+out vec4 out_colour;
+void main() {
+    out_colour = vec4(gl_FrontFacing ? v_front_colour : v_back_colour, 1.0);
+}
+)";
+
 const char* const marker_vs = R"(#version 450 core
 layout(location = 0) in float px;
 layout(location = 1) in float py;
@@ -134,8 +206,8 @@ std::vector<std::uint32_t> lod_triangles(std::uint32_t columns, std::uint32_t ro
 constexpr float strain_stops[5][3] = {
     {0.18f, 0.26f, 0.72f}, {0.20f, 0.68f, 0.92f}, {0.30f, 0.80f, 0.32f}, {0.98f, 0.84f, 0.18f}, {0.86f, 0.13f, 0.10f}};
 
-/// The fragment shader with the colour map's stops written in (one source for the shader and the colour bar).
-std::string cloth_fragment_source() {
+/// A shader's source with the colour map's stops written in (one source for the shaders and the colour bar).
+std::string with_strain_stops(const char* source) {
     std::string stops;
     for (int i = 0; i < 5; ++i) {
         char v[80];
@@ -143,9 +215,27 @@ std::string cloth_fragment_source() {
                       double(strain_stops[i][1]), double(strain_stops[i][2]));
         stops += v;
     }
-    std::string s = cloth_fs;
+    std::string s = source;
     s.replace(s.find("STRAIN_STOPS"), 12, stops);
     return s;
+}
+
+/// Mean length (m) of the triangles' edges at the given positions (each edge counted once per triangle); 0 when
+/// there are none or the positions are not given.
+float mean_edge_length(std::span<const std::uint32_t> triangles, std::span<const float> x, std::span<const float> y,
+                       std::span<const float> z) {
+    double sum = 0.0;
+    std::size_t count = 0;
+    for (std::size_t t = 0; t + 2 < triangles.size(); t += 3)
+        for (int e = 0; e < 3; ++e) {
+            const std::uint32_t a = triangles[t + e], b = triangles[t + (e + 1) % 3];
+            if (a >= x.size() || b >= x.size() || a >= y.size() || b >= y.size() || a >= z.size() || b >= z.size())
+                continue;
+            const double dx = x[a] - x[b], dy = y[a] - y[b], dz = z[a] - z[b];
+            sum += std::sqrt(dx * dx + dy * dy + dz * dz);
+            ++count;
+        }
+    return count ? static_cast<float>(sum / double(count)) : 0.0f;
 }
 
 Eigen::Vector3f to_linear(const Eigen::Vector3f& srgb) {
@@ -166,9 +256,12 @@ Eigen::Vector3f strain_colour_srgb(float t) {
 
 ClothRenderer::ClothRenderer(std::span<const std::uint32_t> triangles, std::size_t particle_count,
                              std::size_t plane_floats, std::uint32_t grid_columns, std::uint32_t grid_rows,
-                             bool full_detail)
+                             bool full_detail, std::span<const float> rest_x, std::span<const float> rest_y,
+                             std::span<const float> rest_z)
     : particle_count_(particle_count), plane_floats_(plane_floats), grid_columns_(grid_columns),
-      ring_(vertex_planes * plane_floats), cloth_program_(cloth_vs, cloth_fragment_source().c_str(), "cloth"),
+      ring_(vertex_planes * plane_floats), cloth_program_(cloth_vs, with_strain_stops(cloth_fs).c_str(), "cloth"),
+      cloth_vertex_lit_program_(with_strain_stops(cloth_vertex_lit_vs).c_str(), cloth_vertex_lit_fs,
+                                "cloth (lit per vertex)"),
       marker_program_(marker_vs, marker_fs, "marker") {
     std::vector<std::uint32_t> coarse;
     const std::uint32_t side = std::max(grid_columns, grid_rows);
@@ -178,6 +271,7 @@ ClothRenderer::ClothRenderer(std::span<const std::uint32_t> triangles, std::size
         coarse = lod_triangles(grid_columns, grid_rows, lod_stride_);
         triangles = coarse;
     }
+    drawn_edge_m_ = mean_edge_length(triangles, rest_x, rest_y, rest_z);
     if (triangles.size() > static_cast<std::size_t>(INT32_MAX))
         throw std::runtime_error("too many triangle indices for one draw call");
     index_count_ = static_cast<GLsizei>(triangles.size());
@@ -212,26 +306,28 @@ std::span<float> ClothRenderer::begin_frame(double* out_wait_ms) {
 }
 
 void ClothRenderer::draw_cloth(const Eigen::Matrix4f& view_projection, const Eigen::Vector3f& eye,
-                               const Shading& s) {
-    const GLuint p = cloth_program_.id();
-    glUseProgram(p);
-    glUniformMatrix4fv(cloth_program_.uniform("u_view_projection"), 1, GL_FALSE, view_projection.data());
-    glUniform1i(cloth_program_.uniform("u_base_vertex"), base_vertex());
-    glUniform1i(cloth_program_.uniform("u_columns"), static_cast<GLint>(grid_columns_));
-    glUniform3fv(cloth_program_.uniform("u_eye"), 1, eye.data());
-    glUniform3fv(cloth_program_.uniform("u_light_position"), 1, s.light_position.data());
-    glUniform1f(cloth_program_.uniform("u_light_intensity"), s.light_intensity);
+                               const Shading& s, float pixels_per_metre, bool pixel_lighting) {
+    drawn_edge_px_ = drawn_edge_m_ * pixels_per_metre;
+    lit_per_vertex_ = !pixel_lighting && drawn_edge_px_ < vertex_lighting_below_px;
+    const Program& program = lit_per_vertex_ ? cloth_vertex_lit_program_ : cloth_program_;
+    glUseProgram(program.id());
+    glUniformMatrix4fv(program.uniform("u_view_projection"), 1, GL_FALSE, view_projection.data());
+    glUniform1i(program.uniform("u_base_vertex"), base_vertex());
+    glUniform1i(program.uniform("u_columns"), static_cast<GLint>(grid_columns_));
+    glUniform3fv(program.uniform("u_eye"), 1, eye.data());
+    glUniform3fv(program.uniform("u_light_position"), 1, s.light_position.data());
+    glUniform1f(program.uniform("u_light_intensity"), s.light_intensity);
     const Eigen::Vector3f front = to_linear(s.front_colour);
     const Eigen::Vector3f back = s.back_colour_enabled ? to_linear(s.back_colour) : front;
-    glUniform3fv(cloth_program_.uniform("u_front"), 1, front.data());
-    glUniform3fv(cloth_program_.uniform("u_back"), 1, back.data());
-    glUniform1f(cloth_program_.uniform("u_ambient"), s.ambient);
-    glUniform1f(cloth_program_.uniform("u_diffuse"), s.diffuse);
-    glUniform1f(cloth_program_.uniform("u_specular"), s.specular);
-    glUniform1f(cloth_program_.uniform("u_shininess"), s.shininess);
-    glUniform1f(cloth_program_.uniform("u_checker"), (s.checker && grid_columns_ > 1) ? 0.12f : 0.0f);
+    glUniform3fv(program.uniform("u_front"), 1, front.data());
+    glUniform3fv(program.uniform("u_back"), 1, back.data());
+    glUniform1f(program.uniform("u_ambient"), s.ambient);
+    glUniform1f(program.uniform("u_diffuse"), s.diffuse);
+    glUniform1f(program.uniform("u_specular"), s.specular);
+    glUniform1f(program.uniform("u_shininess"), s.shininess);
+    glUniform1f(program.uniform("u_checker"), (s.checker && grid_columns_ > 1) ? 0.12f : 0.0f);
     // Strain colours read plane 6, which the caller wrote this frame (strain_plane()) only while they are on.
-    glUniform1f(cloth_program_.uniform("u_strain_max"), s.strain_colours ? std::max(s.strain_max, 1e-6f) : 0.0f);
+    glUniform1f(program.uniform("u_strain_max"), s.strain_colours ? std::max(s.strain_max, 1e-6f) : 0.0f);
     glBindVertexArray(vao_);
     glVertexArrayElementBuffer(vao_, index_buffer_);
     glDisable(GL_CULL_FACE);

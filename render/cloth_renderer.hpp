@@ -11,6 +11,12 @@
 // 1M particles (2M triangles) the full mesh alone costs ~0.2 s per frame, while a 256 x 256 sampling covers
 // the same screen area at about 2 pixels per cell. set_full_detail(true) (--full-mesh) draws every triangle.
 //
+// Lighting per pixel or per vertex: when the drawn triangles' mean edge is under vertex_lighting_below_px pixels
+// on screen, the colour (the same Blinn-Phong, checker and strain colours) is computed at the vertices and
+// interpolated. Such triangles shade a few pixels each, so per-pixel lighting adds nothing visible there, while in
+// llvmpipe it was most of the drawing: at N = 200 (2.1 px edges) the swap of a frame took 17-18 ms lit per pixel
+// and 7-8 ms lit per vertex (docs/viewer.md, "Drawing cost"). Zooming in past the threshold switches back.
+//
 // The vertex array object is set up once: attribute p reads plane p of region 0; a frame selects its region
 // with the base vertex of glDrawElementsBaseVertex (region r starts r * region_stride_floats floats later,
 // the same offset for every plane), so nothing is rebound or copied per frame.
@@ -58,11 +64,15 @@ class ClothRenderer {
 
     /// particle_count vertices laid out as publish.hpp describes (planes of plane_floats floats);
     /// grid_columns > 0 when the cloth is a grid of that many columns (enables the checker pattern).
+    /// rest_x/y/z: positions (m) to measure the drawn triangles' mean edge from (the cloth as built).
     ClothRenderer(std::span<const std::uint32_t> triangles, std::size_t particle_count,
                   std::size_t plane_floats, std::uint32_t grid_columns, std::uint32_t grid_rows,
-                  bool full_detail);
+                  bool full_detail, std::span<const float> rest_x, std::span<const float> rest_y,
+                  std::span<const float> rest_z);
 
     static constexpr std::uint32_t lod_max_side = 256;
+    /// Lit per vertex below this mean edge on screen, in pixels (per pixel from it up).
+    static constexpr float vertex_lighting_below_px = 4.0f;
     ~ClothRenderer();
     ClothRenderer(const ClothRenderer&) = delete;
     ClothRenderer& operator=(const ClothRenderer&) = delete;
@@ -73,8 +83,10 @@ class ClothRenderer {
     std::span<float> strain_plane(std::span<float> region) const noexcept {
         return region.subspan(strain_plane_index * plane_floats_, plane_floats_);
     }
-    void draw_cloth(const Eigen::Matrix4f& view_projection, const Eigen::Vector3f& eye,
-                    const Shading& shading);
+    /// pixels_per_metre: the screen scale at the cloth (framebuffer pixels per metre at the camera's target);
+    /// pixel_lighting forces lighting per pixel whatever the triangles' size.
+    void draw_cloth(const Eigen::Matrix4f& view_projection, const Eigen::Vector3f& eye, const Shading& shading,
+                    float pixels_per_metre, bool pixel_lighting);
     /// Replaces the marker list (only when pins change, not per frame). highlight / hover: particle index or
     /// SIZE_MAX.
     void set_markers(std::span<const std::uint32_t> pinned, std::size_t highlight, std::size_t hover);
@@ -88,6 +100,9 @@ class ClothRenderer {
     /// Every lod_stride()-th row and column is drawn (1 = full mesh).
     std::uint32_t lod_stride() const noexcept { return lod_stride_; }
     const VertexRing& ring() const noexcept { return ring_; }
+    /// The last draw_cloth(): lit per vertex, and the drawn triangles' mean edge on screen (pixels).
+    bool lit_per_vertex() const noexcept { return lit_per_vertex_; }
+    float drawn_edge_px() const noexcept { return drawn_edge_px_; }
 
   private:
     GLint base_vertex() const noexcept { return static_cast<GLint>(region_ * ring_.region_stride_floats()); }
@@ -96,6 +111,9 @@ class ClothRenderer {
     std::size_t plane_floats_;
     std::uint32_t grid_columns_;
     std::uint32_t lod_stride_ = 1;
+    float drawn_edge_m_ = 0.0f;   ///< mean edge of the drawn triangles as built, m
+    float drawn_edge_px_ = 0.0f;  ///< the same on screen at the last draw, pixels
+    bool lit_per_vertex_ = false; ///< the last draw's lighting
     VertexRing ring_;
     std::size_t region_ = 0;
     bool frame_open_ = false;
@@ -107,6 +125,7 @@ class ClothRenderer {
     GLsizei highlight_count_ = 0;
     GLsizei hover_count_ = 0;
     Program cloth_program_;
+    Program cloth_vertex_lit_program_;
     Program marker_program_;
 };
 
