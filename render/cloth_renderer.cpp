@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <initializer_list>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -12,7 +13,11 @@ namespace drape::render {
 
 namespace {
 
-const char* const cloth_vs = R"(#version 450 core
+// The cloth's shaders are put together from the pieces below (cloth_source): one copy of the vertex inputs, the
+// material's uniforms and the lighting, shared by the per-pixel and the per-vertex programs.
+
+// Vertex shader inputs: the ring's planes and the grid's shape.
+const char* const cloth_inputs = R"(
 layout(location = 0) in float px;
 layout(location = 1) in float py;
 layout(location = 2) in float pz;
@@ -23,25 +28,14 @@ layout(location = 6) in float strain;  // plane 6: per-vertex strain (drape/stra
 uniform mat4 u_view_projection;
 uniform int u_base_vertex;  // gl_VertexID includes the base vertex
 uniform int u_columns;      // > 0: grid cloth, index = row * columns + column
-out vec3 v_position;
-out vec3 v_normal;
-out vec2 v_grid;
-out float v_strain;
-void main() {
-    v_position = vec3(px, py, pz);
-    v_strain = strain;
-    v_normal = vec3(nx, ny, nz);
+vec2 grid_coordinates() {   // (column, row) / (columns - 1) of a grid cloth's vertex, else 0
     int k = gl_VertexID - u_base_vertex;
-    v_grid = u_columns > 0 ? vec2(k % u_columns, k / u_columns) / float(max(u_columns - 1, 1)) : vec2(0.0);
-    gl_Position = u_view_projection * vec4(v_position, 1.0);
+    return u_columns > 0 ? vec2(k % u_columns, k / u_columns) / float(max(u_columns - 1, 1)) : vec2(0.0);
 }
 )";
 
-const char* const cloth_fs = R"(#version 450 core
-in vec3 v_position;
-in vec3 v_normal;
-in vec2 v_grid;
-in float v_strain;
+// The material, the light and the colour of a lit point (either stage).
+const char* const cloth_shading = R"(
 uniform vec3 u_eye;
 uniform vec3 u_light_position;
 uniform float u_light_intensity;
@@ -54,12 +48,49 @@ uniform float u_shininess;
 uniform float u_checker;    // 0 = off, else the darkening of every other square
 uniform float u_strain_max; // > 0: colour by strain, 0 .. u_strain_max over the colour map below
 const vec3 strain_stops[5] = vec3[5](STRAIN_STOPS);  // sRGB, the same as strain_colour_srgb()
-out vec4 out_colour;
 vec3 strain_colour(float t) {
     float u = clamp(t, 0.0, 1.0) * 4.0;
     int i = min(int(u), 3);
     return pow(mix(strain_stops[i], strain_stops[i + 1], u - float(i)), vec3(2.2));  // to linear
 }
+// The base colour's factor of the checker pattern at grid coordinates g (1 on light squares).
+float checker(vec2 g) {
+    vec2 cell = floor(g * 16.0 - 1e-4);
+    return 1.0 - u_checker * mod(cell.x + cell.y, 2.0);
+}
+// Blinn-Phong at point p with unit normal n (facing the side lit) and linear base colour; sRGB out.
+vec3 shade(vec3 p, vec3 n, vec3 base) {
+    vec3 l = normalize(u_light_position - p);
+    vec3 v = normalize(u_eye - p);
+    vec3 h = normalize(l + v);
+    float ndl = max(dot(n, l), 0.0);
+    float spec = ndl > 0.0 ? pow(max(dot(n, h), 0.0), u_shininess) : 0.0;
+    vec3 c = u_ambient * base + u_light_intensity * (u_diffuse * ndl * base + vec3(u_specular * spec));
+    return pow(clamp(c, 0.0, 1.0), vec3(1.0 / 2.2));
+}
+)";
+
+// Lit per pixel: the vertex shader passes position, normal, grid coordinates and strain on.
+const char* const cloth_vs_main = R"(
+out vec3 v_position;
+out vec3 v_normal;
+out vec2 v_grid;
+out float v_strain;
+void main() {
+    v_position = vec3(px, py, pz);
+    v_strain = strain;
+    v_normal = vec3(nx, ny, nz);
+    v_grid = grid_coordinates();
+    gl_Position = u_view_projection * vec4(v_position, 1.0);
+}
+)";
+
+const char* const cloth_fs_main = R"(
+in vec3 v_position;
+in vec3 v_normal;
+in vec2 v_grid;
+in float v_strain;
+out vec4 out_colour;
 void main() {
     vec3 n = normalize(v_normal);
     vec3 base = u_front;
@@ -70,59 +101,19 @@ void main() {
     if (u_strain_max > 0.0) {
         base = strain_colour(v_strain / u_strain_max);
     } else if (u_checker > 0.0) {
-        vec2 cell = floor(v_grid * 16.0 - 1e-4);
-        base *= 1.0 - u_checker * mod(cell.x + cell.y, 2.0);
+        base *= checker(v_grid);
     }
-    vec3 l = normalize(u_light_position - v_position);
-    vec3 v = normalize(u_eye - v_position);
-    vec3 h = normalize(l + v);
-    float ndl = max(dot(n, l), 0.0);
-    float spec = ndl > 0.0 ? pow(max(dot(n, h), 0.0), u_shininess) : 0.0;
-    vec3 c = u_ambient * base + u_light_intensity * (u_diffuse * ndl * base + vec3(u_specular * spec));
-    out_colour = vec4(pow(clamp(c, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
+    out_colour = vec4(shade(v_position, n, base), 1.0);
 }
 )";
 
-// Lighting per vertex, for cloths whose drawn triangles are a few pixels across (ClothRenderer::draw_cloth): the
-// same Blinn-Phong colour as cloth_fs, checker and strain colours included, computed at the vertices for both sides
-// and interpolated; the fragment shader only picks the side. llvmpipe's cost of a fragment grows with what its
-// shader computes, and small triangles shade many fragments each (docs/viewer.md, "Drawing cost").
-const char* const cloth_vertex_lit_vs = R"(#version 450 core
-layout(location = 0) in float px;
-layout(location = 1) in float py;
-layout(location = 2) in float pz;
-layout(location = 3) in float nx;
-layout(location = 4) in float ny;
-layout(location = 5) in float nz;
-layout(location = 6) in float strain;
-uniform mat4 u_view_projection;
-uniform int u_base_vertex;
-uniform int u_columns;
-uniform vec3 u_eye;
-uniform vec3 u_light_position;
-uniform float u_light_intensity;
-uniform vec3 u_front;
-uniform vec3 u_back;
-uniform float u_ambient;
-uniform float u_diffuse;
-uniform float u_specular;
-uniform float u_shininess;
-uniform float u_checker;
-uniform float u_strain_max;
-const vec3 strain_stops[5] = vec3[5](STRAIN_STOPS);
+// Lit per vertex, for cloths whose drawn triangles are a few pixels across (ClothRenderer::draw_cloth): the same
+// colour computed at the vertices for both sides and interpolated; the fragment shader only picks the side.
+// llvmpipe's cost of a fragment grows with what its shader computes, and small triangles shade many fragments each
+// (docs/viewer.md, "Drawing cost").
+const char* const cloth_vertex_lit_vs_main = R"(
 out vec3 v_front_colour;
 out vec3 v_back_colour;
-vec3 strain_colour(float t) {
-    float u = clamp(t, 0.0, 1.0) * 4.0;
-    int i = min(int(u), 3);
-    return pow(mix(strain_stops[i], strain_stops[i + 1], u - float(i)), vec3(2.2));
-}
-vec3 lit(vec3 n, vec3 l, vec3 h, vec3 base) {
-    float ndl = max(dot(n, l), 0.0);
-    float spec = ndl > 0.0 ? pow(max(dot(n, h), 0.0), u_shininess) : 0.0;
-    vec3 c = u_ambient * base + u_light_intensity * (u_diffuse * ndl * base + vec3(u_specular * spec));
-    return pow(clamp(c, 0.0, 1.0), vec3(1.0 / 2.2));
-}
 void main() {
     vec3 p = vec3(px, py, pz);
     vec3 n = normalize(vec3(nx, ny, nz));
@@ -131,22 +122,17 @@ void main() {
     if (u_strain_max > 0.0) {
         front = back = strain_colour(strain / u_strain_max);
     } else if (u_checker > 0.0) {
-        int k = gl_VertexID - u_base_vertex;
-        vec2 grid = vec2(k % u_columns, k / u_columns) / float(max(u_columns - 1, 1));
-        vec2 cell = floor(grid * 16.0 - 1e-4);
-        float dark = 1.0 - u_checker * mod(cell.x + cell.y, 2.0);
-        front *= dark;
-        back *= dark;
+        float f = checker(grid_coordinates());
+        front *= f;
+        back *= f;
     }
-    vec3 l = normalize(u_light_position - p);
-    vec3 h = normalize(l + normalize(u_eye - p));
-    v_front_colour = lit(n, l, h, front);
-    v_back_colour = lit(-n, l, h, back);
+    v_front_colour = shade(p, n, front);
+    v_back_colour = shade(p, -n, back);
     gl_Position = u_view_projection * vec4(p, 1.0);
 }
 )";
 
-const char* const cloth_vertex_lit_fs = R"(#version 450 core
+const char* const cloth_vertex_lit_fs_main = R"(
 in vec3 v_front_colour;
 in vec3 v_back_colour;
 out vec4 out_colour;
@@ -206,8 +192,12 @@ std::vector<std::uint32_t> lod_triangles(std::uint32_t columns, std::uint32_t ro
 constexpr float strain_stops[5][3] = {
     {0.18f, 0.26f, 0.72f}, {0.20f, 0.68f, 0.92f}, {0.30f, 0.80f, 0.32f}, {0.98f, 0.84f, 0.18f}, {0.86f, 0.13f, 0.10f}};
 
-/// A shader's source with the colour map's stops written in (one source for the shaders and the colour bar).
-std::string with_strain_stops(const char* source) {
+/// A cloth shader's source: the version line, then the pieces in order, with the colour map's stops written in (one
+/// source for the shaders and the colour bar).
+std::string cloth_source(std::initializer_list<const char*> pieces) {
+    std::string s = "#version 450 core\n";
+    for (const char* p : pieces)
+        s += p;
     std::string stops;
     for (int i = 0; i < 5; ++i) {
         char v[80];
@@ -215,8 +205,7 @@ std::string with_strain_stops(const char* source) {
                       double(strain_stops[i][1]), double(strain_stops[i][2]));
         stops += v;
     }
-    std::string s = source;
-    s.replace(s.find("STRAIN_STOPS"), 12, stops);
+    if (const std::size_t at = s.find("STRAIN_STOPS"); at != std::string::npos) s.replace(at, 12, stops);
     return s;
 }
 
@@ -259,9 +248,10 @@ ClothRenderer::ClothRenderer(std::span<const std::uint32_t> triangles, std::size
                              bool full_detail, std::span<const float> rest_x, std::span<const float> rest_y,
                              std::span<const float> rest_z)
     : particle_count_(particle_count), plane_floats_(plane_floats), grid_columns_(grid_columns),
-      ring_(vertex_planes * plane_floats), cloth_program_(cloth_vs, with_strain_stops(cloth_fs).c_str(), "cloth"),
-      cloth_vertex_lit_program_(with_strain_stops(cloth_vertex_lit_vs).c_str(), cloth_vertex_lit_fs,
-                                "cloth (lit per vertex)"),
+      ring_(vertex_planes * plane_floats), cloth_program_(cloth_source({cloth_inputs, cloth_vs_main}).c_str(),
+                     cloth_source({cloth_shading, cloth_fs_main}).c_str(), "cloth"),
+      cloth_vertex_lit_program_(cloth_source({cloth_inputs, cloth_shading, cloth_vertex_lit_vs_main}).c_str(),
+                                cloth_source({cloth_vertex_lit_fs_main}).c_str(), "cloth (lit per vertex)"),
       marker_program_(marker_vs, marker_fs, "marker") {
     std::vector<std::uint32_t> coarse;
     const std::uint32_t side = std::max(grid_columns, grid_rows);
