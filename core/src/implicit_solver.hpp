@@ -42,8 +42,10 @@ struct ImplicitSolver {
     /// a fixed particle (the first step's guess, implicit_step.cpp).
     std::vector<std::uint32_t> piece;
     std::vector<std::uint8_t> piece_held;
-    std::uint32_t slow_steps = 0; ///< steps in a row with an rms speed below fas_rest_on g h
+    std::uint32_t slow_steps = 0; ///< steps in a row with an rms speed below the bound to start FAS at rest
     bool at_rest = false;         ///< ImplicitParams::fas_at_rest engaged
+    std::uint32_t rest_steps = 0; ///< steps since FAS at rest started
+    float rest_scale = 1.0f;      ///< the bound to start FAS at rest is fas_rest_on x this (halved when FAS fed motion)
 };
 
 } // namespace drape

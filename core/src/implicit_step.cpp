@@ -236,8 +236,23 @@ template <bool Parallel> bool Simulation::fas_at_rest() {
     double sum = 0.0;
     for (double m : is.block_dot) sum += m;
     const double v = std::sqrt(sum / double(std::max<std::size_t>(1, n))) / gh;
-    is.slow_steps = v < fas_rest_on ? is.slow_steps + 1 : 0;
-    is.at_rest = is.at_rest ? v < fas_rest_off : is.slow_steps >= fas_rest_steps;
+    const double on = double(fas_rest_on) * is.rest_scale;
+    if (!is.at_rest) {
+        is.slow_steps = v < on ? is.slow_steps + 1 : 0;
+        is.at_rest = is.slow_steps >= fas_rest_steps;
+        is.rest_steps = is.at_rest ? 1 : 0;
+        return is.at_rest;
+    }
+    is.rest_steps = std::min(is.rest_steps + 1, fas_rest_grace_steps + 1);
+    if (v >= fas_rest_off) { // moved on: a push, a pin released
+        is.at_rest = false;
+    } else if (is.rest_steps > fas_rest_grace_steps && v >= on) {
+        // Not at rest after all (a cloth still swinging slowly, which FAS kept moving): off, and at rest next time
+        // only below half the speed.
+        is.at_rest = false;
+        is.rest_scale = std::max(0.5f * is.rest_scale, fas_rest_scale_min);
+    }
+    if (!is.at_rest) is.slow_steps = 0;
     return is.at_rest;
 }
 
@@ -255,6 +270,11 @@ template <bool Parallel> bool Simulation::multilevel_guess() {
     const float wind_x = params_.wind.strength * static_cast<float>(std::sin(10.0 * t));
     const float wind_phase = static_cast<float>(std::fmod(10.0 * t + cloth_.origin[2], 2.0 * M_PI));
     const bool fas = params_.implicit.fas || fas_at_rest<Parallel>();
+    // FAS at rest comes in over fas_rest_ramp_steps: its correction tau scaled from 1 / ramp to 1, so the cloth
+    // moves from the plain guess's rest to its own gradually instead of in one step (which turned the 6 mm into
+    // a velocity that light air drag took seconds to remove).
+    const float ramp = params_.implicit.fas ? 1.0f
+                                            : std::min(1.0f, float(is.rest_steps) / float(fas_rest_ramp_steps));
     if (fas) {
         // The cloth's force residual at x^n (grad E - M a_ext: zero at rest), restricted level by level.
         float* rx = is.res_x.data();
@@ -351,9 +371,9 @@ template <bool Parallel> bool Simulation::multilevel_guess() {
             for (std::size_t k = 0; k < count; ++k) {
                 const float w = L.inv_mass[k];
                 if (w == 0.0f) continue;
-                px[k] += h2 * w * (L.tx[k] - L.rx[k]) + h * L.vx[k];
-                py[k] += h2 * w * (L.ty[k] - L.ry[k]) + h * L.vy[k];
-                pz[k] += h2 * w * (L.tz[k] - L.rz[k]) + h * L.vz[k];
+                px[k] += ramp * (h2 * w * (L.tx[k] - L.rx[k]) + h * L.vx[k]);
+                py[k] += ramp * (h2 * w * (L.ty[k] - L.ry[k]) + h * L.vy[k]);
+                pz[k] += ramp * (h2 * w * (L.tz[k] - L.rz[k]) + h * L.vz[k]);
             }
         } else if (L.slack) { // FAS switched off: the natural rest lengths again
             L.rest = L.rest0;

@@ -71,7 +71,8 @@ struct ImplicitParams {
     /// to rest at the cloth's own equilibrium rather than the coarse grids'. Off: each level solves its own step.
     bool fas = false;
     /// With the multilevel guess and `fas` off: a cloth whose rms particle speed has been below fas_rest_on g h for
-    /// fas_rest_steps steps in a row solves its coarse levels with FAS until it is above fas_rest_off g h, so it
+    /// fas_rest_steps steps in a row solves its coarse levels with FAS until it is above fas_rest_off g h, or above
+    /// the bound that started it after fas_rest_grace_steps (then that bound halves), so it
     /// comes to rest at its own equilibrium instead of the coarse grids' (the plain guess hung the N = 100 wool hang
     /// 11.8 mm from the explicit equilibrium on average, FAS at rest 0.18 mm). Never with colliders, self-collision,
     /// wind, aerodynamic wind or a grab, where FAS misbehaves. Off by default: with 10 sweeps at N >= 200 FAS does not
@@ -79,9 +80,19 @@ struct ImplicitParams {
     bool fas_at_rest = false;
 };
 
-inline constexpr float fas_rest_on = 0.5f;          ///< x g h: a cloth of a smaller rms speed is at rest
+/// x g h: a cloth of a smaller rms speed is at rest. The plain guess's own drift at rest is 0.03-0.11 g h (wool hang,
+/// N = 32-316, 10 sweeps); a hang still swinging under the scene's light air drag 0.24-0.68 g h, and 0.5 let FAS start
+/// there and feed the swing (docs/implicit.md, "FAS at rest under light air drag").
+inline constexpr float fas_rest_on = 0.15f;
 inline constexpr float fas_rest_off = 2.0f;         ///< x g h: a larger rms speed ends FAS at rest
 inline constexpr std::uint32_t fas_rest_steps = 10; ///< steps at rest before FAS starts
+/// FAS at rest's first steps move the cloth from the plain guess's rest to its own (a jump of 0.3 g h for one step at
+/// N = 100); after these steps a cloth whose rms speed is again above the bound that started FAS is not at rest: FAS
+/// stops, and the bound to start it again halves (down to fas_rest_on x fas_rest_scale_min).
+inline constexpr std::uint32_t fas_rest_grace_steps = 60;
+/// FAS at rest's correction comes in linearly over this many steps (ImplicitSolver::rest_steps).
+inline constexpr std::uint32_t fas_rest_ramp_steps = 30;
+inline constexpr float fas_rest_scale_min = 1.0f / 16.0f;
 
 /// The Chebyshev rho a level runs its `iterations` sweeps with (0: plain sweeps): the asked rho, none below
 /// chebyshev_min_iterations, at most chebyshev_few_rho below chebyshev_full_iterations.
