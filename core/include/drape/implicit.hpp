@@ -76,7 +76,8 @@ struct ImplicitParams {
     /// comes to rest at its own equilibrium instead of the coarse grids' (the plain guess hung the N = 100 wool hang
     /// 11.8 mm from the explicit equilibrium on average, FAS at rest 0.18 mm). Never with colliders, self-collision,
     /// wind, aerodynamic wind or a grab, where FAS misbehaves. Off by default: with 10 sweeps at N >= 200 FAS does not
-    /// settle (8-22 mm a step, where the plain guess drifts by 1 mm; docs/implicit.md, "FAS at rest").
+    /// settle (8-22 mm a step, where the plain guess drifts by 1 mm; docs/implicit.md, "FAS at rest"); there it now
+    /// tries twice and stays off.
     bool fas_at_rest = false;
 };
 
