@@ -7,6 +7,10 @@
 #   convergence.md / .json / .csv / .png   relative energy error against iterations and wall time, N = 100, 316
 #   throughput.md / .json     vertex-iterations/s beside particle-substeps/s; thread scaling 1 -> 2
 #   rest.md / .json           whether the hang comes to rest (largest motion per step once a second), N = 32, 100
+#   settled.md / .json, settled_fas_at_rest.md / .json   the settled-shape criterion at 10 sweeps with the strain
+#             limit, N = 32, 100: each run's shape after 8 s under drag 5/s against the explicit equilibrium reached
+#             from it, the plain multilevel guess and FAS at rest (docs/implicit.md, "FAS at rest under light air drag,
+#             and the settled shape")
 #   machine.txt               date, CPU, load average before and after
 # Usage: bench/implicit/figures.sh [--out DIR] [--build DIR] [--quick] [-- extra drape_implicit realtime flags]
 #   --quick   N = 100 only with a 4 s settle (a smoke run of the whole pipeline, a few minutes)
@@ -54,6 +58,11 @@ echo "== convergence" >&2
 "$py" "$root/bench/implicit/plot_convergence.py" "$out/convergence.csv" "$out/convergence.png"
 echo "== rest" >&2
 "$bin" rest --n 32,100 --threads 2 --json-out "$out/rest.json" | tee "$out/rest.md"
+echo "== settled shape" >&2
+settled=(--n 32,100 --threads 2 --settle-time 10 --settle-drag 5 --explicit-reference --ref-drag 5 --iterations 10
+         --strain-limit 0.095 --explicit-budget 0 --explicit-short 0.0001)
+"$bin" realtime "${settled[@]}" --json-out "$out/settled.json" | tee "$out/settled.md"
+"$bin" realtime "${settled[@]}" --fas-at-rest --json-out "$out/settled_fas_at_rest.json" | tee "$out/settled_fas_at_rest.md"
 echo "== realtime" >&2
 "$bin" realtime --n "$rt_sizes" --threads 2 "${settle[@]}" "${extra[@]}" --json-out "$out/realtime.json" | tee "$out/realtime.md"
 if [[ $quick == 0 ]]; then
