@@ -397,7 +397,7 @@ void Viewer::ui_solver() {
     if (ImGui::Checkbox("FAS at rest", &at_rest)) s.set_fas_at_rest(at_rest);
     help_marker("With the multilevel guess: once the cloth's rms speed has stayed below 0.15 g dt for 10 steps, the "
                 "coarse levels answer the cloth's own force residual (full approximation scheme, brought in over 30 "
-                "steps) until it exceeds 2 g dt or is not at rest 60 steps later, so a cloth at rest settles at its "
+                "steps) until it exceeds 2 g dt or is not at rest 30 steps later, so a cloth at rest settles at its "
                 "own equilibrium, not the coarse grids' (which hang it a few millimetres too high). Never with "
                 "colliders, self-collision, wind or a grab. Above 150 x 150 it needs more than 10 iterations; "
                 "with fewer it gives up after two tries.");

@@ -90,7 +90,7 @@ inline constexpr std::uint32_t fas_rest_steps = 10; ///< steps at rest before FA
 /// FAS at rest's first steps move the cloth from the plain guess's rest to its own (a jump of 0.3 g h for one step at
 /// N = 100); after these steps a cloth whose rms speed is again above the bound that started FAS is not at rest: FAS
 /// stops, and the bound to start it again halves (down to fas_rest_on x fas_rest_scale_min).
-inline constexpr std::uint32_t fas_rest_grace_steps = 60;
+inline constexpr std::uint32_t fas_rest_grace_steps = 30;
 /// FAS at rest's correction comes in linearly over this many steps (ImplicitSolver::rest_steps).
 inline constexpr std::uint32_t fas_rest_ramp_steps = 30;
 inline constexpr float fas_rest_scale_min = 1.0f / 16.0f;
