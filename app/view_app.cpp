@@ -743,7 +743,9 @@ void Viewer::print_stats_json() const {
                          {"chebyshev_rho_used", chebyshev_rho_used(s.params())},
                          {"tolerance", s.params().implicit.tolerance},
                          {"budget", session_->iteration_budget()},
-                         {"budget_ms", session_->sim_budget_ms()}};
+                         {"budget_ms", session_->sim_budget_ms()},
+                         {"fas_at_rest", s.params().implicit.fas_at_rest},
+                         {"fas_last_step", s.implicit_stats().fas}};
     j["max_strain"] = last_publish_.max_structural_strain;
     j["strain_limit"] = s.params().strain_limit.ratio; // 0 = off
     j["finite"] = last_publish_.finite && session_->error().empty();

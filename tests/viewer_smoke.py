@@ -373,6 +373,7 @@ def main():
     if not (stats.get("solver") == "implicit" and stats["substeps_per_frame"] == 1 and stats["finite"] and
             4 <= im.get("iterations", 0) <= 20 and im.get("max_iterations") == 20 and
             1 <= im.get("last_step_iterations", 0) <= 20 and 0 <= im.get("relative_residual", -1) < 1e30 and
+            im.get("fas_at_rest") is False and im.get("fas_last_step") is False and
             stats.get("real_time_factor", 0) > 0):
         print(f"FAIL: implausible implicit stats: {stats}")
         return 1
