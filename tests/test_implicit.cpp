@@ -364,8 +364,12 @@ TEST(Implicit, FasComesToRestOnTheExplicitEquilibrium) {
         // 8.3 / 10.7 / 40 mm: the free corners' folds, which can settle either way
         EXPECT_LT(distance, variant == 0 ? 1e-2 : 2e-2) << variant;
     }
-    // FAS at rest's speed test sums blocks in block order: the same bits serially and at any worker count (72 x 72:
-    // 5 blocks), switched on by the end.
+}
+
+// FAS at rest's speed test sums blocks in block order: the same bits serially and at any worker count (72 x 72: 5
+// blocks), switched on by the end. Short enough for the ASan run, which leaves out the come-to-rest tests above and
+// below.
+TEST(Implicit, FasAtRestSameBitsSeriallyAndAtEveryWorkerCount) {
     const SceneBuild big = build_hang_scene(fabric_hang(72));
     auto run = [&](int workers, bool serial) {
         Workers arena(workers);
