@@ -529,7 +529,7 @@ void Viewer::draw_scene() {
     glEnable(GL_DEPTH_TEST);
     colliders_->draw(vp, camera_.eye(), shading_.light_position);
     // Pixels per metre at the camera's target: the screen scale that decides per-vertex or per-pixel lighting.
-    const float ppm = float(fh) / (2.0f * camera_.distance * std::tan(0.5f * camera_.fov_y_deg * 0.01745329f));
+    const float ppm = float(fh) / camera_.visible_height();
     renderer_->draw_cloth(vp, camera_.eye(), shading_, ppm, pixel_lighting_);
     if (show_ground_) stage_->draw_ground(vp, camera_.eye());
     int ww = 1, wh = 1;

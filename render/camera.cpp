@@ -73,9 +73,12 @@ void OrbitCamera::orbit(float d_yaw, float d_pitch) {
     pitch = std::clamp(pitch + d_pitch, -max_pitch, max_pitch);
 }
 
+float OrbitCamera::visible_height() const {
+    return 2.0f * distance * std::tan(0.5f * radians(fov_y_deg));
+}
+
 void OrbitCamera::pan(float dx, float dy) {
-    const float visible = 2.0f * distance * std::tan(0.5f * radians(fov_y_deg));
-    target += visible * (dx * right() + dy * up());
+    target += visible_height() * (dx * right() + dy * up());
 }
 
 void OrbitCamera::zoom(float factor) {

@@ -27,6 +27,8 @@ struct OrbitCamera {
     /// Perspective for a viewport of width/height `aspect`; near and far planes follow the distance.
     Eigen::Matrix4f projection(float aspect) const;
 
+    /// Height of the view at the target's distance, m (the viewport's height in metres there).
+    float visible_height() const;
     /// Adds to yaw and pitch (rad).
     void orbit(float d_yaw, float d_pitch);
     /// Moves the target in the view plane by fractions of the visible height at the target (dx right, dy up).
