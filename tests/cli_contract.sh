@@ -334,9 +334,10 @@ else
     echo "ok: --export-obj -> $frames frames"
 fi
 
-# A mesh cloth from an OBJ file (scenes/examples/mesh_disc.json -> tests/data/disc.obj, 469 vertices) runs and exports.
+# A mesh cloth from an OBJ file (scenes/examples/mesh_disc.json -> tests/data/disc.obj, 469 vertices) runs and exports
+# (0.1 s: 2,268 steps, 24 frames; 0.5 s took 48 s under ASan).
 repo=$(cd "$(dirname "$0")/.." && pwd)
-if ! "$DRAPE" run --scene "$repo/scenes/examples/mesh_disc.json" --sim-seconds 0.5 --export-obj "$tmpdir/mesh" \
+if ! "$DRAPE" run --scene "$repo/scenes/examples/mesh_disc.json" --sim-seconds 0.1 --export-obj "$tmpdir/mesh" \
         --json >"$out" 2>"$err" || [ -s "$err" ]; then
     echo "FAIL: mesh_disc run"; cat "$err"; fail=1
 fi
