@@ -120,10 +120,16 @@ int cmd_realtime(const Options& opt) {
         const bool newton = have_newton_reference() && n <= opt.newton_max_n;
         if (opt.explicit_reference) {
             // Explicit Euler from the implicit (else explicit) settled shape, for both.
+            // When both settled, each from its own shape: a hanging cloth has many equilibria, and a run still
+            // moving at the settle time (slow folds) is then measured against where it was going.
             if (!fi.settled.empty()) eq_i = explicit_equilibrium(im, scene.params, opt);
-            else if (!fe.settled.empty()) eq_i = explicit_equilibrium(ex, scene.params, opt);
-            eq_e = eq_i;
+            if (!fe.settled.empty()) eq_e = explicit_equilibrium(ex, scene.params, opt);
+            if (!eq_i) eq_i = eq_e;
+            if (!eq_e) eq_e = eq_i;
             if (eq_i) rep.notes.push_back("N = " + std::to_string(n) + ": reference equilibrium by " + eq_i->method);
+            if (eq_e && !fi.settled.empty() && !fe.settled.empty())
+                rep.notes.push_back("N = " + std::to_string(n) + " explicit: its own reference equilibrium by " +
+                                    eq_e->method);
         } else if (!newton) {
             // One long implicit run from the implicit (else explicit) settled shape, for both.
             if (!fi.settled.empty()) eq_i = reference_equilibrium(im, opt, n);
