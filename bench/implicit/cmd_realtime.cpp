@@ -119,9 +119,9 @@ int cmd_realtime(const Options& opt) {
         const auto t_ref = std::chrono::steady_clock::now();
         const bool newton = have_newton_reference() && n <= opt.newton_max_n;
         if (opt.explicit_reference) {
-            // Explicit Euler from the implicit (else explicit) settled shape, for both.
-            // When both settled, each from its own shape: a hanging cloth has many equilibria, and a run still
-            // moving at the settle time (slow folds) is then measured against where it was going.
+            // Explicit Euler from each run's settled shape (one that did not settle shares the other's): a hanging
+            // cloth has many equilibria, and a run still moving at the settle time (slow folds) is measured against
+            // where it was going.
             if (!fi.settled.empty()) eq_i = explicit_equilibrium(im, scene.params, opt);
             if (!fe.settled.empty()) eq_e = explicit_equilibrium(ex, scene.params, opt);
             if (!eq_i) eq_i = eq_e;
