@@ -235,6 +235,32 @@ TEST(SceneMasks, BrokenFilesGiveClearErrors) {
                     "cloth.panels[0].rows has 4097 entries (at most 4096)"));
 }
 
+// A seam that joins nothing (an edge sewn to itself, or two rows of one panel its springs join already) ran as if
+// sewn, silently.
+TEST(SceneMasks, SeamsThatJoinNothingAreRefused) {
+    const auto build_error = [](const std::string& pa, const std::string& pb, const std::string& second = "a") {
+        const std::string text = R"({"cloth": {"type": "mask", "panels": [{"name": "a", "rows": ["111", "111"]},
+            {"name": "b", "rows": ["111", "111"], "origin": [0, 0, 0.1]}],
+            "seams": [{"a": {"panel": "a", "path": )" + pa + R"(}, "b": {"panel": ")" + second +
+                                 R"(", "path": )" + pb + "}}]}}";
+        try {
+            build_scene(parse_scene(text, "test.json"));
+        } catch (const InvalidInput& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    std::string msg = build_error("[[0, 0], [0, 2]]", "[[0, 0], [0, 2]]");
+    EXPECT_TRUE(has(msg, "test.json: cloth.seams[0] joins nothing: of its 3 cell pairs 3 pair a cell with itself and "
+                         "0 pair cells already joined")) << msg;
+    msg = build_error("[[0, 0], [0, 2]]", "[[1, 0], [1, 2]]"); // the structural springs between rows 0 and 1
+    EXPECT_TRUE(has(msg, "of its 3 cell pairs 0 pair a cell with itself and 3 pair cells already joined")) << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    // One new pair is enough; a seam to the other panel is a seam.
+    EXPECT_EQ(build_error("[[0, 0], [0, 2]]", "[[1, 2], [1, 0]]"), ""); // (0, 0) to (1, 2), (0, 2) to (1, 0)
+    EXPECT_EQ(build_error("[[0, 0], [0, 2]]", "[[0, 0], [0, 2]]", "b"), "");
+}
+
 // A '1' touching no other '1' and no seam was a loose particle: a checkerboard mask ran "healthy" with 0 springs.
 TEST(SceneMasks, LooseCellsAreRefusedNamingTheFirst) {
     const auto build_error = [](const std::string& rows, const std::string& seams = "") {

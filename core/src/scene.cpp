@@ -1337,6 +1337,7 @@ void build_mask_cloth(const SceneSpec& s, BuiltScene& out) {
                                "]: edges of unequal length or an unknown panel");
         const float rest =
             seam.rest_ratio * 0.5f * (m.panels[seam.a.panel].cell_size + m.panels[seam.b.panel].cell_size);
+        std::size_t itself = 0, before = 0;
         for (std::size_t j = 0; j < ca.size(); ++j) {
             const std::int32_t pa = panels[seam.a.panel].particle_at(ca[j][0], ca[j][1]);
             const std::int32_t pb = panels[seam.b.panel].particle_at(cb[j][0], cb[j][1]);
@@ -1345,9 +1346,24 @@ void build_mask_cloth(const SceneSpec& s, BuiltScene& out) {
                                    "]: a cell of the seam holds no particle");
             const auto lo_i = static_cast<std::uint32_t>(std::min(pa, pb)),
                        hi_i = static_cast<std::uint32_t>(std::max(pa, pb));
-            if (lo_i == hi_i || !joined.insert({lo_i, hi_i}).second) continue;
+            if (lo_i == hi_i) {
+                ++itself;
+                continue;
+            }
+            if (!joined.insert({lo_i, hi_i}).second) {
+                ++before;
+                continue;
+            }
             a.edges.push_back({lo_i, hi_i, SpringKind::seam, rest});
         }
+        // A seam that joins nothing is a mistake in the file (the same edge twice, or two rows of one panel that its
+        // springs already join), not a seam: refused rather than run as if sewn.
+        if (itself + before == ca.size())
+            throw InvalidInput(s.source + ": cloth.seams[" + std::to_string(k) + "] joins nothing: of its " +
+                               std::to_string(ca.size()) + " cell pairs " + std::to_string(itself) +
+                               " pair a cell with itself and " + std::to_string(before) +
+                               " pair cells already joined (by the panel's springs or an earlier seam); a seam "
+                               "sews two different edges, cell k of a to cell k of b");
     }
     // A '1' with no '1' beside, above or below it (or across a corner with a shared neighbour) and no seam would be
     // a loose particle falling on its own: refused, naming the first such cell (a checkerboard mask ran "healthy"
