@@ -324,6 +324,15 @@ TEST(Scenes, BrokenOutlinesGiveClearErrors) {
     const std::string same = R"({"cloth": {"type": "outline", "outline": [[0,0],[1,0],[0,1]], "copy": {"sew": [[1, 1]]}}})";
     EXPECT_TRUE(has(scene_error_of(same), "cloth.copy.sew[0] = [1, 1]: from and to must be different vertices"))
         << scene_error_of(same);
+    // A stretch sewn twice (given twice, or overlapping another) sewed its particles again, joining nothing new.
+    const std::string twice =
+        R"({"cloth": {"type": "outline", "outline": [[0,0],[1,0],[1,1],[0,1]], "copy": {"sew": [[0, 2], [1, 3]]}}})";
+    EXPECT_TRUE(has(scene_error_of(twice), "cloth.copy.sew[1] = [1, 3] sews outline edge 1 (vertices 1-2) that "
+                                           "cloth.copy.sew[0] sews already"))
+        << scene_error_of(twice);
+    const std::string loop =
+        R"({"cloth": {"type": "outline", "outline": [[0,0],[1,0],[1,1],[0,1]], "copy": {"sew": [[0, 2], [2, 0]]}}})";
+    EXPECT_EQ(scene_error_of(loop), "");
     const std::string huge = R"({"cloth": {"type": "outline", "outline": [[0,0],[100,0],[0,100]], "spacing": 0.001}})";
     EXPECT_TRUE(has(scene_error_of(huge), "test.json: cloth.spacing = 0.001 m gives this outline up to")) << scene_error_of(huge);
     EXPECT_TRUE(has(scene_error_of(huge), "at most 4000000")) << scene_error_of(huge);

@@ -972,6 +972,20 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
                                           "and [2, 0])");
                 o.sew.push_back({v[0].get<std::uint32_t>(), v[1].get<std::uint32_t>()});
             }
+            // Each outline edge sewn once: a stretch given twice (or two overlapping ones) sewed its particles again,
+            // where the second seam joined nothing new.
+            const std::size_t corners = pts->size();
+            std::vector<std::size_t> sewn_by(corners, SIZE_MAX);
+            for (std::size_t k = 0; k < o.sew.size(); ++k)
+                for (std::size_t e = o.sew[k][0]; e != o.sew[k][1]; e = (e + 1) % corners) {
+                    if (sewn_by[e] != SIZE_MAX)
+                        cloth.fail(copy.at("sew") + "[" + std::to_string(k) + "]",
+                                   "= [" + std::to_string(o.sew[k][0]) + ", " + std::to_string(o.sew[k][1]) +
+                                       "] sews outline edge " + std::to_string(e) + " (vertices " + std::to_string(e) +
+                                       "-" + std::to_string((e + 1) % corners) + ") that " + copy.at("sew") + "[" +
+                                       std::to_string(sewn_by[e]) + "] sews already (each stretch is sewn once)");
+                    sewn_by[e] = k;
+                }
         }
         copy.finish();
         try {
