@@ -238,6 +238,10 @@ int main(int argc, char** argv) {
     view_cmd->add_flag("--pixel-lighting", view.pixel_lighting,
                        "Light every pixel (default: triangles under 4 pixels across on screen are lit at their "
                        "vertices)");
+    bool no_overlap = false;
+    view_cmd->add_flag("--no-overlap", no_overlap,
+                       "Simulate and draw one after the other (default: the next frame simulates on its own thread "
+                       "while this one is drawn)");
     view_cmd->add_option("--camera-yaw", view.camera_yaw_deg,
                          "Camera angle around the vertical, degrees: 0 looks from +z (a garment's front), 90 from +x, "
                          "180 from behind [default: the scene's view, front-right]")
@@ -289,6 +293,7 @@ int main(int argc, char** argv) {
         // `drape view`, or `drape` alone: the viewer.
         view.vsync = !no_vsync;
         view.ui = !no_ui;
+        view.overlap = !no_overlap;
 #ifdef DRAPE_WITH_VIEWER
         return drape::app::view_command(view);
 #else

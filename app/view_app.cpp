@@ -553,11 +553,33 @@ void Viewer::save_screenshot(const std::string& path) {
     std::fprintf(stderr, "drape view: saved %s (%d x %d)\n", path.c_str(), fw, fh);
 }
 
+void Viewer::note_session_error() {
+    if (session_->error().empty()) return;
+    had_error_ = true;
+    failure_code_ = session_->error_code();
+    if (session_->error() != reported_error_) {
+        // Said on stderr too (automation reads it; the window shows a banner).
+        reported_error_ = session_->error();
+        std::fprintf(stderr, "drape view: %s: %s\n",
+                     failure_code_ == exit_code::blow_up ? "the cloth exploded" : "simulation stopped",
+                     reported_error_.c_str());
+    }
+}
+
 int Viewer::run() {
     auto last_swap = clock_type::now();
     const std::string final_screenshot = options_.screenshot;
     while (!glfwWindowShouldClose(window_)) {
-        const auto frame_start = clock_type::now();
+        FrameTimes t;
+        // The step started while the last frame was drawn ends before input, panels or picking touch the session.
+        if (step_running_) {
+            const auto w0 = clock_type::now();
+            last_substeps_ = session_->finish_step();
+            t.sim_wait = ms_since(w0);
+            t.sim = session_->last_step_ms();
+            step_running_ = false;
+            note_session_error();
+        }
         glfwPollEvents();
         run_demo_script();
 
@@ -581,22 +603,16 @@ int Viewer::run() {
         for (int key : held)
             io.KeysDown[key] = glfwGetKey(window_, key) == GLFW_PRESS;
 
-        FrameTimes t;
-        // 1. Simulate.
+        // 1. Simulate: here (the last frame, or --no-overlap: the frame shows this step), or on a thread of its own
+        // once this frame's state is published (below), while the frame is drawn.
+        const bool last_frame = options_.frames > 0 && frame_index_ + 1 >= options_.frames;
+        const bool overlap = options_.overlap && !last_frame;
         auto t0 = clock_type::now();
         const bool built_this_frame = session_->building();
-        last_substeps_ = session_->advance();
-        t.sim = ms_since(t0);
-        if (!session_->error().empty()) {
-            had_error_ = true;
-            failure_code_ = session_->error_code();
-            if (session_->error() != reported_error_) {
-                // Said on stderr too (automation reads it; the window shows a banner).
-                reported_error_ = session_->error();
-                std::fprintf(stderr, "drape view: %s: %s\n",
-                             failure_code_ == exit_code::blow_up ? "the cloth exploded" : "simulation stopped",
-                             reported_error_.c_str());
-            }
+        if (!overlap) {
+            last_substeps_ = session_->advance();
+            t.sim = ms_since(t0);
+            note_session_error();
         }
         sync_gpu();
         update_hover();
@@ -617,6 +633,7 @@ int Viewer::run() {
             had_error_ = true;
             failure_code_ = exit_code::non_finite;
         }
+        if (overlap && last_publish_.finite) step_running_ = session_->start_step();
 
         // 3. Draw. A simulation stopped on an error is not drawn (an explosion would fill the window): the
         // banner says what happened.
@@ -629,7 +646,6 @@ int Viewer::run() {
         }
         ImGui::Render();
         ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-        const bool last_frame = options_.frames > 0 && frame_index_ + 1 >= options_.frames;
         if (!pending_screenshot_.empty()) {
             save_screenshot(pending_screenshot_);
             pending_screenshot_.clear();
@@ -642,7 +658,6 @@ int Viewer::run() {
         t.swap = std::chrono::duration<double, std::milli>(now - swap_start).count();
         t.draw = std::chrono::duration<double, std::milli>(now - t0).count() + t.wait;
         t.frame = std::chrono::duration<double, std::milli>(now - last_swap).count();
-        (void)frame_start;
         last_swap = now;
         last_ = t;
         if (samples_.size() < 1'000'000) samples_.push_back(t);
@@ -657,6 +672,7 @@ int Viewer::run() {
 
         // Overlay figures: averages over ~0.5 s.
         window_sum_.sim += t.sim;
+        window_sum_.sim_wait += t.sim_wait;
         window_sum_.publish += t.publish;
         window_sum_.draw += t.draw;
         window_sum_.wait += t.wait;
@@ -667,6 +683,7 @@ int Viewer::run() {
         if (window_ms >= 500.0 || frame_index_ < 2) {
             const double n = window_frames_;
             shown_.sim = window_sum_.sim / n;
+            shown_.sim_wait = window_sum_.sim_wait / n;
             shown_.publish = window_sum_.publish / n;
             shown_.draw = window_sum_.draw / n;
             shown_.wait = window_sum_.wait / n;
@@ -679,6 +696,11 @@ int Viewer::run() {
         }
         ++frame_index_;
         if (last_frame) break;
+    }
+    if (step_running_) { // the window was closed while a step ran
+        last_substeps_ = session_->finish_step();
+        step_running_ = false;
+        note_session_error();
     }
     if (options_.frames == 0 && !final_screenshot.empty()) {
         // Interactive run with --screenshot: the last frame drawn is still in the front buffer; redraw it
@@ -705,10 +727,11 @@ int Viewer::run() {
 void Viewer::print_stats_json() const {
     // Median over the frames after the first few (shader compilation, first touches of the buffers).
     const std::size_t skip = std::min<std::size_t>(10, samples_.size() / 5);
-    std::vector<double> frame, sim, publish, draw, wait, swap;
+    std::vector<double> frame, sim, sim_wait, publish, draw, wait, swap;
     for (std::size_t i = skip; i < samples_.size(); ++i) {
         frame.push_back(samples_[i].frame);
         sim.push_back(samples_[i].sim);
+        sim_wait.push_back(samples_[i].sim_wait);
         publish.push_back(samples_[i].publish);
         draw.push_back(samples_[i].draw);
         wait.push_back(samples_[i].wait);
@@ -718,8 +741,12 @@ void Viewer::print_stats_json() const {
     const Simulation& s = session_->sim();
     nlohmann::ordered_json j;
     j["fps"] = frame_ms > 0.0 ? 1000.0 / frame_ms : 0.0;
-    j["frame_ms"] = {{"sim", median(sim)},         {"publish", median(publish)}, {"draw", median(draw)},
-                     {"fence_wait", median(wait)}, {"swap", median(swap)},       {"total", frame_ms}};
+    // sim: the step's own time; with the overlap (the default) it runs while the previous frame draws, and sim_wait
+    // is what the frame waited for it.
+    j["frame_ms"] = {{"sim", median(sim)},           {"sim_wait", median(sim_wait)}, {"publish", median(publish)},
+                     {"draw", median(draw)},         {"fence_wait", median(wait)},   {"swap", median(swap)},
+                     {"total", frame_ms}};
+    j["overlap"] = options_.overlap;
     j["particles"] = s.cloth().particle_count;
     j["springs"] = s.cloth().spring_count();
     j["substeps_per_frame"] = session_->substeps();

@@ -36,7 +36,8 @@ namespace drape::app {
 
 /// Per-frame timings, ms.
 struct FrameTimes {
-    double sim = 0.0;
+    double sim = 0.0;      ///< the step's own wall time (overlapped: the step that ran while the last frame drew)
+    double sim_wait = 0.0; ///< overlapped: how long this frame waited for that step to end
     double publish = 0.0;
     double draw = 0.0;  ///< draw calls + panels + swap + fence wait
     double wait = 0.0;  ///< fence wait alone (part of draw)
@@ -153,6 +154,8 @@ class Viewer {
     bool show_help_ = false;
     bool show_ground_ = true;
     bool full_mesh_ = false;
+    bool step_running_ = false; ///< a step runs on its own thread while this frame is drawn (ViewOptions::overlap)
+    void note_session_error(); ///< a simulation error: the exit code, and once on stderr
     bool pixel_lighting_ = false; ///< light every pixel, whatever the triangles' size on screen
     bool gpu_full_mesh_ = false;
     int ui_size_ = 64;

@@ -31,6 +31,7 @@ struct ViewOptions {
     bool ui = true;           ///< panels and overlay
     bool full_mesh = false;   ///< draw every triangle (no level of detail for fine grids)
     bool pixel_lighting = false; ///< light every pixel (default: per vertex where triangles are under 4 px)
+    bool overlap = true; ///< simulate the next frame while this one is drawn (--no-overlap: one after the other)
     std::optional<float> camera_yaw_deg; ///< camera around the vertical, degrees: 0 from +z (the front), 180 the back
     // Hidden automation hooks (documentation screenshots, tests).
     bool panels_open = false; ///< every panel section expanded

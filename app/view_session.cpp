@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <functional>
 #include <sstream>
+#include <utility>
 
 #include "drape/errors.hpp"
 #include "drape/memory_estimate.hpp"
@@ -203,6 +204,7 @@ ViewSession::ViewSession(const std::string& scene, std::optional<std::uint32_t> 
 }
 
 ViewSession::~ViewSession() {
+    if (step_thread_.joinable()) step_thread_.join();
     if (job_ && job_->thread.joinable()) job_->thread.join();
 }
 
@@ -508,27 +510,61 @@ void ViewSession::refresh_pins() {
     ++markers_version_;
 }
 
-std::size_t ViewSession::advance() {
+bool ViewSession::step_due() {
     // A new cloth is shown first as built: the frame that swaps it in (new GPU buffers) does not also simulate it.
-    if (poll()) return 0;
-    if (!running_ && !step_pending_) return 0;
+    if (poll()) return false;
+    if (!running_ && !step_pending_) return false;
     // A node-mass rebuild continues the motion from when it was asked for: the old cloth holds still meanwhile.
-    if (job_ && job_->request.keep) return 0;
+    if (job_ && job_->request.keep) return false;
     step_pending_ = false;
-    const std::size_t before = sim_->steps_done();
+    return true;
+}
+
+void ViewSession::run_step() {
     const auto start = std::chrono::steady_clock::now();
     try {
         workers_->run([&] { sim_->step(static_cast<std::size_t>(substeps_)); });
-        if (params_.solver == Solver::implicit) note_frame_sim_ms(1e3 * seconds_since(start));
-    } catch (const SimulationError& e) {
-        running_ = false;
-        error_ = e.what();
-        error_code_ = dynamic_cast<const BlowUpError*>(&e) ? exit_code::blow_up : exit_code::non_finite;
-        post(MessageLevel::error, std::string(error_code_ == exit_code::blow_up ? "the cloth exploded: "
-                                                                                 : "simulation stopped: ") +
-                                      error_ + " - Reset, or Undo the last change");
+    } catch (...) {
+        step_error_ = std::current_exception();
     }
-    return sim_->steps_done() - before;
+    step_ms_ = 1e3 * seconds_since(start);
+}
+
+std::size_t ViewSession::advance() {
+    if (!step_due()) return 0;
+    step_before_ = sim_->steps_done();
+    step_open_ = true;
+    run_step();
+    return finish_step();
+}
+
+bool ViewSession::start_step() {
+    if (step_open_ || !step_due()) return false;
+    step_before_ = sim_->steps_done();
+    step_open_ = true;
+    step_thread_ = std::thread([this] { run_step(); });
+    return true;
+}
+
+std::size_t ViewSession::finish_step() {
+    if (!step_open_) return 0;
+    if (step_thread_.joinable()) step_thread_.join();
+    step_open_ = false;
+    if (std::exception_ptr error = std::exchange(step_error_, nullptr)) {
+        try {
+            std::rethrow_exception(error);
+        } catch (const SimulationError& e) {
+            running_ = false;
+            error_ = e.what();
+            error_code_ = dynamic_cast<const BlowUpError*>(&e) ? exit_code::blow_up : exit_code::non_finite;
+            post(MessageLevel::error, std::string(error_code_ == exit_code::blow_up ? "the cloth exploded: "
+                                                                                     : "simulation stopped: ") +
+                                          error_ + " - Reset, or Undo the last change");
+        }
+    } else if (params_.solver == Solver::implicit) {
+        note_frame_sim_ms(step_ms_);
+    }
+    return sim_->steps_done() - step_before_;
 }
 
 PublishStats ViewSession::publish(std::span<float> out) {

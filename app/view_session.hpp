@@ -28,6 +28,7 @@
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <exception>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -165,6 +166,15 @@ class ViewSession {
     /// Catches SimulationError (BlowUpError too): pauses, keeps the last finite state and sets error(). Returns the
     /// substeps run.
     std::size_t advance();
+    /// advance() in two halves, so that the viewer draws the last frame while the next one simulates: start_step()
+    /// polls and decides on the caller's thread, then runs the step on a thread of its own and returns whether it
+    /// started one; finish_step() waits for it and does what advance() does after the step (errors, the iteration
+    /// budget), returning the substeps run (0 when none was started). Between the two nothing else may touch the
+    /// session (the viewer only draws what it published before). The same bits as advance().
+    bool start_step();
+    std::size_t finish_step();
+    /// Wall milliseconds of the last step (advance() or start_step()), measured on its own thread.
+    double last_step_ms() const noexcept { return step_ms_; }
     /// Writes the current positions and normals into `out` (Publisher::publish) inside the workers.
     PublishStats publish(std::span<float> out);
     /// Runs f inside the session's workers (other per-frame output stages: strain colours).
@@ -455,6 +465,14 @@ class ViewSession {
     float spacing_ = 0.0f;
     bool running_ = true;
     bool step_pending_ = false;
+    // The step start_step() began: its thread, the steps done before it, its wall time and its exception.
+    std::thread step_thread_;
+    bool step_open_ = false;
+    std::size_t step_before_ = 0;
+    double step_ms_ = 0.0;
+    std::exception_ptr step_error_;
+    bool step_due();
+    void run_step();
     SimulationParams params_; ///< run parameters kept across rebuilds
     double implicit_dt_ = view_implicit_dt;
     double explicit_dt_ = 0.0;

@@ -479,6 +479,7 @@ void Viewer::ui_overlay() {
     const ViewSession& s = *session_;
     const Simulation& sim = s.sim();
     ImGui::Text("%.1f FPS   (%.2f ms / frame)", shown_fps_, shown_.frame);
+    // (With the overlap, the default, sim runs beside the draw: the frame takes about the larger of the two.)
     ImGui::Text("sim %.2f ms | publish %.2f ms | draw %.2f ms", shown_.sim, shown_.publish, shown_.draw);
     const bool implicit = sim.params().solver == Solver::implicit;
     ImGui::Text("%s/frame %d   dt %.3g s", implicit ? "implicit steps" : "substeps", s.substeps(),

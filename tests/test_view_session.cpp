@@ -515,6 +515,40 @@ TEST(ViewSession, NonFiniteStepPausesAndUndoRestartsWithTheSettingsBefore) {
     EXPECT_TRUE(s.sim().health().finite);
 }
 
+// The viewer simulates the next frame on a thread of its own while it draws this one (start_step / finish_step):
+// the same bits as advance(), a paused session starts nothing, and an error ends the step as advance() ends it.
+TEST(ViewSession, StepOnItsOwnThreadIsTheSameAsAdvance) {
+    ViewSession a(24, 2, std::nullopt), b(24, 2, std::nullopt);
+    for (int frame = 0; frame < 12; ++frame) {
+        if (frame == 5) {
+            a.grab(grid_index(24, 12, 23), {0.1f, -0.3f, 0.2f});
+            b.grab(grid_index(24, 12, 23), {0.1f, -0.3f, 0.2f});
+        }
+        const std::size_t ran = a.advance();
+        ASSERT_TRUE(b.start_step());
+        EXPECT_FALSE(b.start_step()); // one at a time
+        EXPECT_EQ(b.finish_step(), ran);
+        EXPECT_GT(b.last_step_ms(), 0.0);
+    }
+    EXPECT_EQ(a.sim().checksum(), b.sim().checksum());
+    EXPECT_EQ(b.finish_step(), 0u); // none open
+    b.set_running(false);
+    EXPECT_FALSE(b.start_step());
+    b.step_once();
+    ASSERT_TRUE(b.start_step()); // the Step button
+    EXPECT_EQ(b.finish_step(), static_cast<std::size_t>(b.substeps()));
+
+    ViewSession c(16, 1, std::nullopt);
+    c.grab(grid_index(16, 15, 15), {1e30f, 1e30f, 1e30f});
+    for (int i = 0; i < 3 && c.error().empty(); ++i)
+        if (c.start_step()) c.finish_step();
+    ASSERT_FALSE(c.error().empty());
+    EXPECT_EQ(c.error_code(), exit_code::non_finite);
+    EXPECT_FALSE(c.running());
+    EXPECT_FALSE(c.start_step());
+    EXPECT_TRUE(c.sim().health().finite);
+}
+
 TEST(ViewSession, WorkersRunTheRequestedCount) {
     ViewSession s(16, 3, std::nullopt);
     EXPECT_EQ(s.threads(), 3);
