@@ -58,6 +58,11 @@ float checker(vec2 g) {
     vec2 cell = floor(g * 16.0 - 1e-4);
     return 1.0 - u_checker * mod(cell.x + cell.y, 2.0);
 }
+// The base colour of one side (u_front or u_back) at a point of strain s and grid coordinates g: the strain map when
+// strain colours are on, else the side's colour times the checker (1 when the checker is off).
+vec3 surface_colour(vec3 side, float s, vec2 g) {
+    return u_strain_max > 0.0 ? strain_colour(s / u_strain_max) : side * checker(g);
+}
 // Blinn-Phong at point p with unit normal n (facing the side lit) and linear base colour; sRGB out.
 vec3 shade(vec3 p, vec3 n, vec3 base) {
     vec3 l = normalize(u_light_position - p);
@@ -92,17 +97,9 @@ in vec2 v_grid;
 in float v_strain;
 out vec4 out_colour;
 void main() {
-    vec3 n = normalize(v_normal);
-    vec3 base = u_front;
-    if (!gl_FrontFacing) {  // two-sided lighting: the back face is lit with the flipped normal
-        n = -n;
-        base = u_back;
-    }
-    if (u_strain_max > 0.0) {
-        base = strain_colour(v_strain / u_strain_max);
-    } else if (u_checker > 0.0) {
-        base *= checker(v_grid);
-    }
+    // Two-sided lighting: the back face is lit with the flipped normal.
+    vec3 n = gl_FrontFacing ? normalize(v_normal) : -normalize(v_normal);
+    vec3 base = surface_colour(gl_FrontFacing ? u_front : u_back, v_strain, v_grid);
     out_colour = vec4(shade(v_position, n, base), 1.0);
 }
 )";
@@ -117,17 +114,9 @@ out vec3 v_back_colour;
 void main() {
     vec3 p = vec3(px, py, pz);
     vec3 n = normalize(vec3(nx, ny, nz));
-    vec3 front = u_front;
-    vec3 back = u_back;
-    if (u_strain_max > 0.0) {
-        front = back = strain_colour(strain / u_strain_max);
-    } else if (u_checker > 0.0) {
-        float f = checker(grid_coordinates());
-        front *= f;
-        back *= f;
-    }
-    v_front_colour = shade(p, n, front);
-    v_back_colour = shade(p, -n, back);
+    vec2 g = grid_coordinates();
+    v_front_colour = shade(p, n, surface_colour(u_front, strain, g));
+    v_back_colour = shade(p, -n, surface_colour(u_back, strain, g));
     gl_Position = u_view_projection * vec4(p, 1.0);
 }
 )";

@@ -94,6 +94,8 @@ inline constexpr std::uint32_t fas_rest_grace_steps = 30;
 /// FAS at rest's correction comes in linearly over this many steps (ImplicitSolver::rest_steps).
 inline constexpr std::uint32_t fas_rest_ramp_steps = 30;
 inline constexpr float fas_rest_scale_min = 1.0f / 16.0f;
+// FAS at rest is judged (fas_rest_grace_steps) only once its correction is in whole.
+static_assert(fas_rest_grace_steps >= fas_rest_ramp_steps);
 
 /// The Chebyshev rho a level runs its `iterations` sweeps with (0: plain sweeps): the asked rho, none below
 /// chebyshev_min_iterations, at most chebyshev_few_rho below chebyshev_full_iterations.
