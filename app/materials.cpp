@@ -225,4 +225,19 @@ std::string single_level_implicit_warning(const Simulation& sim) {
            "fabric model have one): a cloth " + one_grid + "; prefer the explicit solver here";
 }
 
+std::string unconverged_implicit_warning(const Simulation& sim, float max_structural_strain, const char* remedy) {
+    const ImplicitStats& st = sim.implicit_stats();
+    if (sim.params().solver != Solver::implicit || !(max_structural_strain > unconverged_strain) ||
+        !(st.relative_residual > unconverged_residual))
+        return {};
+    char text[512];
+    std::snprintf(text, sizeof text,
+                  "the cloth is stretched by %.0f %% (max structural strain %.3g) and the implicit steps are far from "
+                  "converged (relative residual %.3g after %u sweeps, above %.2g, at dt %.4g s): this stretch is the "
+                  "sweeps' error, not the fabric's; %s",
+                  100.0 * double(max_structural_strain), double(max_structural_strain), st.relative_residual,
+                  st.iterations, unconverged_residual, double(sim.params().dt), remedy);
+    return text;
+}
+
 } // namespace drape::app

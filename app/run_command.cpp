@@ -388,6 +388,8 @@ int run_command(const RunOptions& o) {
         std::cerr << "drape run: " << error << std::endl;
         return exit_code::non_finite;
     }
+    if (const std::string w = unconverged_implicit_warning(sim, health.max_structural_strain, unconverged_remedy_cli); !w.empty())
+        std::cerr << "drape run: warning: " << w << std::endl;
     if (sp.strain_limit.ratio > 0.0f && !(health.max_limited_stretch <= 1.1f * sp.strain_limit.ratio))
         std::cerr << "drape run: warning: strain limit " << sp.strain_limit.ratio << " not honoured: max stretch "
                   << health.max_limited_stretch << " (more than 1.1 x the limit) after up to "

@@ -622,7 +622,10 @@ int Viewer::run() {
         std::span<float> region = renderer_->begin_frame(&t.wait);
         t0 = clock_type::now();
         last_publish_ = session_->publish(region);
-        if (last_publish_.finite) publish_strain(region);
+        if (last_publish_.finite) {
+            publish_strain(region);
+            session_->note_published_strain(last_publish_.max_structural_strain);
+        }
         t.publish = ms_since(t0);
         if (!last_publish_.finite) {
             // Cannot happen after a finite step (the core checks); never draw garbage if it does.

@@ -685,6 +685,13 @@ void ViewSession::warn_about_settings(bool new_cloth) {
     if (!text.empty()) post(MessageLevel::warning, text);
 }
 
+void ViewSession::note_published_strain(float max_structural_strain) {
+    if (!sim_ || step_open_) return;
+    const std::string w = unconverged_implicit_warning(*sim_, max_structural_strain, unconverged_remedy_viewer);
+    if (!w.empty() && !unconverged_warned_) post(MessageLevel::warning, w);
+    unconverged_warned_ = !w.empty();
+}
+
 std::shared_ptr<const ViewSession::KeepState> ViewSession::capture_state() {
     auto k = std::make_shared<KeepState>();
     sim_->release_grab();

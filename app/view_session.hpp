@@ -331,6 +331,9 @@ class ViewSession {
 
     const Message& message() const noexcept { return message_; }
     void post(MessageLevel level, std::string text);
+    /// After a publish (the step joined, none running): posts unconverged_implicit_warning (materials.hpp) for the
+    /// published strain once each time it starts to apply.
+    void note_published_strain(float max_structural_strain);
     /// Non-empty after the simulation stopped on a non-finite value or an explosion (until reset()).
     const std::string& error() const noexcept { return error_; }
     /// exit_code::blow_up (BlowUpError), exit_code::non_finite (another SimulationError) or exit_code::ok.
@@ -390,6 +393,7 @@ class ViewSession {
     bool single_level_warned_ = false;
     bool thickness_warned_ = false;
     bool inside_warned_ = false;
+    bool unconverged_warned_ = false;
     void refresh_pins();
     /// The settings of a scene as loaded, at `size` (throws InvalidInput for a size out of range).
     Snapshot settings_for(SceneSpec spec, std::optional<std::uint32_t> size);

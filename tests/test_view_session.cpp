@@ -982,3 +982,35 @@ TEST(ViewSessionImplicit, UndoAcrossSolversWithATinyExplicitDt) {
     EXPECT_EQ(s.advance(), 1u);
     EXPECT_TRUE(s.sim().health().finite);
 }
+
+// Too few sweeps for the step: the implicit flag at 2 sweeps per 0.1 s step ends several times its length, which the
+// health monitor's bound (what the wind can supply) lets pass. The viewer says so once, in the Physics panel's words;
+// at the default sweeps nothing is said.
+TEST(ViewSessionImplicit, UnconvergedStretchIsWarnedAboutOnce) {
+    auto run = [](bool starve) {
+        ViewSession s("flag", std::nullopt, 1, std::nullopt);
+        s.set_solver(Solver::implicit);
+        if (starve) {
+            s.set_iteration_budget(false);
+            s.set_max_iterations(2);
+            s.set_dt(0.1);
+        }
+        s.set_running(true);
+        std::size_t posts = 0;
+        auto last = s.message().when;
+        for (int frame = 0; frame < 400 && s.sim().time() < 2.0; ++frame) {
+            s.advance();
+            s.note_published_strain(s.sim().health().max_structural_strain);
+            // each post stamps its time: a second post of the same text counts again
+            if (s.message().when != last && s.message().text.find("far from converged") != std::string::npos) ++posts;
+            last = s.message().when;
+        }
+        EXPECT_GE(s.sim().time(), 2.0 - 1e-6);
+        return std::pair{posts, s.message().text};
+    };
+    const auto [starved_posts, starved_text] = run(true);
+    EXPECT_EQ(starved_posts, 1u) << starved_text;
+    EXPECT_NE(starved_text.find("raise the Physics panel's iterations"), std::string::npos) << starved_text;
+    const auto [default_posts, default_text] = run(false);
+    EXPECT_EQ(default_posts, 0u) << default_text;
+}
