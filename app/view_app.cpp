@@ -693,6 +693,7 @@ int Viewer::run() {
             shown_.swap = window_sum_.swap / n;
             shown_.frame = window_sum_.frame / n;
             shown_fps_ = 1000.0 * n / std::max(window_ms, 1e-3);
+            if (frame_index_ >= 2) session_->note_frame_time(shown_.frame);
             window_sum_ = {};
             window_frames_ = 0;
             window_start_ = clock_type::now();

@@ -692,6 +692,28 @@ void ViewSession::note_published_strain(float max_structural_strain) {
     unconverged_warned_ = !w.empty();
 }
 
+double ViewSession::note_frame_time(double frame_ms) {
+    // params_ (the session's copy), not the simulation's: a step may be running on its own thread.
+    const double factor = frame_ms > 0.0 ? double(substeps_) * double(params_.dt) / (frame_ms * 1e-3) : 0.0;
+    if (!running_ || params_.solver == Solver::implicit || !(factor > 0.0) || factor >= slow_explicit_factor)
+        return factor;
+    if (slow_hinted_generation_ == generation_) return factor;
+    // A warning or error still fresh on the message line is not replaced by a hint.
+    if (message_.level != MessageLevel::info &&
+        std::chrono::steady_clock::now() - message_.when < std::chrono::seconds(10))
+        return factor;
+    slow_hinted_generation_ = generation_;
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "the explicit solver runs this cloth at %.2gx real time: its substep (%.3g s) must stay below the "
+                  "stability bound, which shrinks as the cloth gets finer; the implicit solver (Physics panel: solver) "
+                  "takes frame-long steps and runs large cloths many times faster, though it damps the swing more "
+                  "(docs/implicit.md)",
+                  factor, double(params_.dt));
+    post(MessageLevel::info, text);
+    return factor;
+}
+
 std::shared_ptr<const ViewSession::KeepState> ViewSession::capture_state() {
     auto k = std::make_shared<KeepState>();
     sim_->release_grab();

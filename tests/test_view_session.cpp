@@ -1014,3 +1014,43 @@ TEST(ViewSessionImplicit, UnconvergedStretchIsWarnedAboutOnce) {
     const auto [default_posts, default_text] = run(false);
     EXPECT_EQ(default_posts, 0u) << default_text;
 }
+
+// A cloth the explicit solver runs far slower than real time: the viewer says once per cloth that the implicit solver
+// takes frame-long steps. Not while paused, not with the implicit solver, not when fast enough, not over a fresh
+// warning.
+TEST(ViewSession, SlowExplicitClothHintsAtTheImplicitSolverOncePerCloth) {
+    ViewSession s("hang", 100u, 1, std::nullopt);
+    ASSERT_NE(s.solver(), Solver::implicit);
+    s.set_running(true);
+    const double frame_ms = 1000.0 * double(s.substeps()) * double(s.params().dt) / 0.1; // 0.1x real time
+    const auto before = s.message().when;
+    EXPECT_NEAR(s.note_frame_time(frame_ms), 0.1, 1e-6);
+    EXPECT_NE(s.message().when, before);
+    EXPECT_EQ(s.message().level, MessageLevel::info);
+    EXPECT_NE(s.message().text.find("runs this cloth at 0.1x real time"), std::string::npos) << s.message().text;
+    EXPECT_NE(s.message().text.find("implicit solver (Physics panel: solver)"), std::string::npos) << s.message().text;
+    const auto first = s.message().when;
+    s.note_frame_time(frame_ms);
+    EXPECT_EQ(s.message().when, first) << "posted twice for the same cloth";
+    s.set_size(90); // a new cloth: hinted again
+    s.wait();
+    s.set_running(true);
+    s.post(MessageLevel::warning, "a fresh warning");
+    s.note_frame_time(frame_ms);
+    EXPECT_EQ(s.message().text, "a fresh warning") << "a fresh warning was replaced by the hint";
+    s.post(MessageLevel::info, "done");
+    s.note_frame_time(1000.0 * double(s.substeps()) * double(s.params().dt) / 0.9); // 0.9x: fast enough
+    EXPECT_EQ(s.message().text, "done");
+    s.note_frame_time(frame_ms);
+    EXPECT_NE(s.message().text.find("runs this cloth at"), std::string::npos) << s.message().text;
+    ViewSession q("hang", 100u, 1, std::nullopt);
+    q.set_solver(Solver::implicit);
+    q.set_running(true);
+    q.post(MessageLevel::info, "implicit");
+    q.note_frame_time(1e6);
+    EXPECT_EQ(q.message().text, "implicit") << "hinted with the implicit solver";
+    q.set_solver(Solver::explicit_euler);
+    q.set_running(false);
+    q.note_frame_time(1e6);
+    EXPECT_EQ(q.message().text.find("runs this cloth at"), std::string::npos) << "hinted while paused";
+}
