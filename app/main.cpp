@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"explicit", "implicit"}));
     cmd->add_option("--iterations", run.iterations,
                     "Implicit solver: iterations (sweeps) per step, the most with --tolerance [scene's, 30]")
-        ->check(in_range<std::uint32_t>(1, 1000));
+        ->check(in_range<std::uint32_t>(1, drape::implicit_max_iterations));
     cmd->add_option("--tolerance", run.tolerance,
                     "Implicit solver: stop a step once its residual is below this fraction of the first sweep's "
                     "(0 = always run --iterations) [scene's, 0]")
@@ -196,7 +196,7 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"explicit", "implicit"}));
     view_cmd->add_option("--iterations", view.iterations,
                          "Implicit solver: the most iterations per step (the frame budget may run fewer) [scene's, 30]")
-        ->check(in_range<std::uint32_t>(1, 1000));
+        ->check(in_range<std::uint32_t>(1, drape::implicit_max_iterations));
     view_cmd->add_option("--tolerance", view.tolerance,
                          "Implicit solver: stop a step once its residual is below this fraction of the first sweep's")
         ->check(in_range<float>(0.0f, 1.0f));

@@ -225,19 +225,42 @@ std::string single_level_implicit_warning(const Simulation& sim) {
            "fabric model have one): a cloth " + one_grid + "; prefer the explicit solver here";
 }
 
-std::string unconverged_implicit_warning(const Simulation& sim, float max_structural_strain, const char* remedy) {
+std::string unconverged_implicit_warning(const Simulation& sim, float max_structural_strain, bool viewer,
+                                         bool budget_limited) {
     const ImplicitStats& st = sim.implicit_stats();
-    if (sim.params().solver != Solver::implicit || !(max_structural_strain > unconverged_strain) ||
+    const SimulationParams& p = sim.params();
+    if (p.solver != Solver::implicit || !(max_structural_strain > unconverged_strain) ||
         !(st.relative_residual > unconverged_residual))
         return {};
-    char text[512];
-    std::snprintf(text, sizeof text,
-                  "the cloth is stretched by %.0f %% (max structural strain %.3g) and the implicit steps are far from "
-                  "converged (relative residual %.3g after %u sweeps, above %.2g, at dt %.4g s): this stretch is the "
-                  "sweeps' error, not the fabric's; %s",
-                  100.0 * double(max_structural_strain), double(max_structural_strain), st.relative_residual,
-                  st.iterations, unconverged_residual, double(sim.params().dt), remedy);
-    return text;
+    auto fmt = [](const char* f, auto... v) {
+        char b[400];
+        std::snprintf(b, sizeof b, f, v...);
+        return std::string(b);
+    };
+    std::vector<std::string> fixes;
+    if (p.implicit.tolerance > unconverged_residual)
+        fixes.push_back(fmt(viewer ? "lower the tolerance (now %g) below %g" : "lower --tolerance (now %g) below %g "
+                                                                              "(allowed [0, 1])",
+                            double(p.implicit.tolerance), unconverged_residual));
+    if (budget_limited)
+        fixes.push_back("give the Physics panel's iteration budget more ms or switch it off (it ran " +
+                        std::to_string(st.iterations) + " sweeps)");
+    if (p.implicit.iterations < implicit_max_iterations)
+        fixes.push_back(fmt(viewer ? "raise the Physics panel's iterations (now %u, allowed [1, %u])"
+                                   : "raise --iterations (now %u, allowed [1, %u])",
+                            p.implicit.iterations, implicit_max_iterations));
+    fixes.push_back(fmt(viewer ? "shorten dt (now %.4g s)" : "shorten --dt (now %.4g s, allowed [%g, 0.1] s)",
+                        double(p.dt), double(implicit_min_dt)));
+    fixes.push_back(viewer ? "switch the strain limit on (0.1 = 10 %)" : "set --strain-limit (0.1 = 10 %)");
+    std::string fix;
+    for (std::size_t k = 0; k < fixes.size(); ++k)
+        fix += (k == 0 ? "" : k + 1 == fixes.size() ? " or " : ", ") + fixes[k];
+    return fmt("the cloth is strained by %.0f %% (max structural strain %.3g, above %.0f %%) and the implicit steps "
+               "are far from converged (relative residual %.3g after %u sweeps, above %g): this strain is the sweeps' "
+               "error, not the fabric's; ",
+               100.0 * double(max_structural_strain), double(max_structural_strain), 100.0 * double(unconverged_strain),
+               st.relative_residual, st.iterations, unconverged_residual) +
+           fix;
 }
 
 } // namespace drape::app

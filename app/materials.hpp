@@ -62,15 +62,14 @@ void apply_solver_flags(SceneSpec& spec, const SolverFlags& flags);
 /// T-shirt and mask garments, the springs model, non-square grids; 256 particles or more): such a cloth does not come to rest at
 /// ordinary sweep counts (docs/implicit.md). Empty when it does not apply. `drape run` and the viewer show it.
 std::string single_level_implicit_warning(const Simulation& sim);
-/// A warning (or empty) after implicit steps that end with the cloth stretched past unconverged_strain while the last
-/// step's sweeps were far from converged (relative residual above unconverged_residual): the motion is then the
-/// sweeps' error, not the fabric's (a flag at 2 sweeps per 0.1 s step ended 720 % stretched and "healthy").
-/// `remedy`: what to change, in the words of the caller's interface (CLI flags, or the viewer's Physics panel).
-std::string unconverged_implicit_warning(const Simulation& sim, float max_structural_strain, const char* remedy);
-inline constexpr const char* unconverged_remedy_cli =
-    "raise --iterations (allowed [1, 1000]), shorten --dt or set --strain-limit";
-inline constexpr const char* unconverged_remedy_viewer =
-    "raise the Physics panel's iterations (allowed [1, 1000]), shorten dt or switch the strain limit on";
+/// A warning (or empty) after implicit steps that end with the cloth strained (stretched or compressed) past
+/// unconverged_strain while the last step's sweeps were far from converged (relative residual above
+/// unconverged_residual): the motion is then the sweeps' error, not the fabric's (a flag at 2 sweeps per 0.1 s step
+/// ended 720 % stretched and "healthy"). What to change is said in the words of the interface: `drape run`'s flags, or
+/// (`viewer`) the Physics panel's controls; `budget_limited`: the viewer's iteration budget ran fewer sweeps than its
+/// iterations allow. A tolerance above unconverged_residual is named first, the iterations only below their maximum.
+std::string unconverged_implicit_warning(const Simulation& sim, float max_structural_strain, bool viewer,
+                                         bool budget_limited = false);
 inline constexpr double unconverged_residual = 0.1;
 inline constexpr float unconverged_strain = 0.3f;
 /// A warning when movable particles of the simulation's present state are inside a collider, deeper than half its

@@ -686,8 +686,10 @@ void ViewSession::warn_about_settings(bool new_cloth) {
 }
 
 void ViewSession::note_published_strain(float max_structural_strain) {
-    if (!sim_ || step_open_) return;
-    const std::string w = unconverged_implicit_warning(*sim_, max_structural_strain, unconverged_remedy_viewer);
+    // Not over a stopped simulation's error (the frame that posts it publishes too).
+    if (!sim_ || step_open_ || !error_.empty()) return;
+    const bool budget_limited = budget_on_ && sim_->params().implicit.iterations < max_iterations_;
+    const std::string w = unconverged_implicit_warning(*sim_, max_structural_strain, true, budget_limited);
     if (!w.empty() && !unconverged_warned_) post(MessageLevel::warning, w);
     unconverged_warned_ = !w.empty();
 }
@@ -695,21 +697,24 @@ void ViewSession::note_published_strain(float max_structural_strain) {
 double ViewSession::note_frame_time(double frame_ms) {
     // params_ (the session's copy), not the simulation's: a step may be running on its own thread.
     const double factor = frame_ms > 0.0 ? double(substeps_) * double(params_.dt) / (frame_ms * 1e-3) : 0.0;
-    if (!running_ || params_.solver == Solver::implicit || !(factor > 0.0) || factor >= slow_explicit_factor)
+    // Substeps set by hand: the slow motion is the user's choice.
+    if (!running_ || !auto_substeps_ || params_.solver == Solver::implicit || !(factor > 0.0) ||
+        factor >= slow_explicit_factor)
         return factor;
-    if (slow_hinted_generation_ == generation_) return factor;
+    const std::pair<std::uint64_t, std::size_t> cloth{scene_generation_, sim_ ? sim_->cloth().particle_count : 0};
+    if (slow_hinted_for_ == cloth) return factor;
     // A warning or error still fresh on the message line is not replaced by a hint.
     if (message_.level != MessageLevel::info &&
         std::chrono::steady_clock::now() - message_.when < std::chrono::seconds(10))
         return factor;
-    slow_hinted_generation_ = generation_;
+    slow_hinted_for_ = cloth;
     char text[400];
     std::snprintf(text, sizeof text,
-                  "the explicit solver runs this cloth at %.2gx real time: its substep (%.3g s) must stay below the "
-                  "stability bound, which shrinks as the cloth gets finer; the implicit solver (Physics panel: solver) "
-                  "takes frame-long steps and runs large cloths many times faster, though it damps the swing more "
-                  "(docs/implicit.md)",
-                  factor, double(params_.dt));
+                  "the explicit solver runs this cloth at %.2gx real time (below %.1fx): its substep (%.3g s) must "
+                  "stay below the stability bound, which shrinks as the cloth gets finer; the implicit solver "
+                  "(Physics panel: solver) takes frame-long steps and runs large cloths many times faster, though it "
+                  "damps the swing more (docs/implicit.md)",
+                  factor, slow_explicit_factor, double(params_.dt));
     post(MessageLevel::info, text);
     return factor;
 }

@@ -400,7 +400,9 @@ class ViewSession {
     bool thickness_warned_ = false;
     bool inside_warned_ = false;
     bool unconverged_warned_ = false;
-    std::uint64_t slow_hinted_generation_ = UINT64_MAX; ///< the cloth (generation_) the slow-explicit hint was for
+    /// The cloth the slow-explicit hint was for: the scene (scene_generation_) and its particle count, so a reset,
+    /// an undo or a node-mass rebuild of the same cloth does not repeat it.
+    std::pair<std::uint64_t, std::size_t> slow_hinted_for_{UINT64_MAX, 0};
     void refresh_pins();
     /// The settings of a scene as loaded, at `size` (throws InvalidInput for a size out of range).
     Snapshot settings_for(SceneSpec spec, std::optional<std::uint32_t> size);

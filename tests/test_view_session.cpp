@@ -13,6 +13,7 @@
 #include "drape/errors.hpp"
 #include "drape/scene_write.hpp"
 #include "drape/stability.hpp"
+#include "materials.hpp"
 #include "view_session.hpp"
 
 using namespace drape;
@@ -994,6 +995,8 @@ TEST(ViewSessionImplicit, UnconvergedStretchIsWarnedAboutOnce) {
             s.set_iteration_budget(false);
             s.set_max_iterations(2);
             s.set_dt(0.1);
+            EXPECT_EQ(s.params().implicit.iterations, 2u);
+            EXPECT_FLOAT_EQ(s.params().dt, 0.1f);
         }
         s.set_running(true);
         std::size_t posts = 0;
@@ -1013,6 +1016,40 @@ TEST(ViewSessionImplicit, UnconvergedStretchIsWarnedAboutOnce) {
     EXPECT_NE(starved_text.find("raise the Physics panel's iterations"), std::string::npos) << starved_text;
     const auto [default_posts, default_text] = run(false);
     EXPECT_EQ(default_posts, 0u) << default_text;
+}
+
+// The starved flag run on until the health monitor stops it (2.4 s): the error, not the warning, stays on the message
+// line. And the warning's advice follows what limited the sweeps: under the iteration budget (the viewer's default,
+// which cuts the sweeps to at least 10) the budget is named; in drape run's words the flags.
+TEST(ViewSessionImplicit, UnconvergedWarningYieldsToTheErrorAndNamesWhatLimitedTheSweeps) {
+    ViewSession s("flag", std::nullopt, 1, std::nullopt);
+    s.set_solver(Solver::implicit);
+    s.set_iteration_budget(false);
+    s.set_max_iterations(2);
+    s.set_dt(0.1);
+    s.set_running(true);
+    bool warned = false; // (the session is not told the strain in the loop: its first warning comes after the error)
+    for (int frame = 0; frame < 100 && s.error().empty(); ++frame) {
+        s.advance();
+        if (s.error().empty()) {
+            const float strain = s.sim().health().max_structural_strain;
+            if (!unconverged_implicit_warning(s.sim(), strain, true, false).empty()) {
+                warned = true;
+                EXPECT_NE(unconverged_implicit_warning(s.sim(), strain, true, true)
+                              .find("give the Physics panel's iteration budget more ms or switch it off"),
+                          std::string::npos);
+                EXPECT_NE(unconverged_implicit_warning(s.sim(), strain, false).find("raise --iterations (now 2"),
+                          std::string::npos);
+            }
+        }
+    }
+    EXPECT_TRUE(warned);
+    ASSERT_FALSE(s.error().empty()) << "the health monitor did not stop the starved flag within 10 s";
+    EXPECT_EQ(s.message().level, MessageLevel::error) << s.message().text;
+    const float strain = s.sim().health().max_structural_strain; // the state the monitor went back to
+    ASSERT_FALSE(unconverged_implicit_warning(s.sim(), strain, true).empty()) << "the case would not test the guard";
+    s.note_published_strain(strain);
+    EXPECT_EQ(s.message().level, MessageLevel::error) << "the warning replaced the error: " << s.message().text;
 }
 
 // A cloth the explicit solver runs far slower than real time: the viewer says once per cloth that the implicit solver
@@ -1045,11 +1082,13 @@ TEST(ViewSession, SlowExplicitClothHintsAtTheImplicitSolverOncePerCloth) {
     EXPECT_NE(s.message().text.find("runs this cloth at"), std::string::npos) << s.message().text;
     ViewSession q("hang", 100u, 1, std::nullopt);
     q.set_solver(Solver::implicit);
+    ASSERT_EQ(q.solver(), Solver::implicit);
     q.set_running(true);
     q.post(MessageLevel::info, "implicit");
     q.note_frame_time(1e6);
     EXPECT_EQ(q.message().text, "implicit") << "hinted with the implicit solver";
     q.set_solver(Solver::explicit_euler);
+    ASSERT_EQ(q.solver(), Solver::explicit_euler);
     q.set_running(false);
     q.note_frame_time(1e6);
     EXPECT_EQ(q.message().text.find("runs this cloth at"), std::string::npos) << "hinted while paused";

@@ -1071,7 +1071,7 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
                                          " = \"implicit\" keeps velocities: use \"euler\" (or leave it out)");
     if (ph.has("dt")) s.dt = static_cast<float>(ph.number("dt", 1e-9, 0.1, " s", 0.0));
     ObjectReader im = ph.object("implicit");
-    p.implicit.iterations = im.integer("iterations", 1, 1000, p.implicit.iterations);
+    p.implicit.iterations = im.integer("iterations", 1, implicit_max_iterations, p.implicit.iterations);
     p.implicit.tolerance = static_cast<float>(
         im.number("tolerance", 0.0, 1.0, " (0 = run every iteration)", double(p.implicit.tolerance)));
     const double rho = im.number("chebyshev_rho", 0.0, 1.0, " (1 excluded; 0 = no acceleration)", double(p.implicit.chebyshev_rho));

@@ -32,6 +32,8 @@ inline constexpr float implicit_default_dt = 1.0f / 30.0f;
 /// The implicit solver's shortest step, s: below it a step's motion under gravity (h^2 g, 1e-7 m at 1e-4 s) is lost to
 /// the float rounding of positions a metre from the origin, and the cloth never moves (found at 1e-9 s).
 inline constexpr float implicit_min_dt = 1e-4f;
+/// The most sweeps a step may be asked for (ImplicitParams::iterations: scene files, --iterations, the viewer).
+inline constexpr std::uint32_t implicit_max_iterations = 1000;
 
 /// Iteration method of the implicit solver.
 enum class ImplicitMethod : std::uint8_t {
