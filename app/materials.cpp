@@ -225,13 +225,16 @@ std::string single_level_implicit_warning(const Simulation& sim) {
            "fabric model have one): a cloth " + one_grid + "; prefer the explicit solver here";
 }
 
+bool implicit_unconverged(const Simulation& sim, float max_structural_strain) noexcept {
+    return sim.params().solver == Solver::implicit && max_structural_strain > unconverged_strain &&
+           sim.implicit_stats().relative_residual > unconverged_residual;
+}
+
 std::string unconverged_implicit_warning(const Simulation& sim, float max_structural_strain, bool viewer,
                                          bool budget_limited) {
+    if (!implicit_unconverged(sim, max_structural_strain)) return {};
     const ImplicitStats& st = sim.implicit_stats();
     const SimulationParams& p = sim.params();
-    if (p.solver != Solver::implicit || !(max_structural_strain > unconverged_strain) ||
-        !(st.relative_residual > unconverged_residual))
-        return {};
     auto fmt = [](const char* f, auto... v) {
         char b[400];
         std::snprintf(b, sizeof b, f, v...);

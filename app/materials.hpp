@@ -70,6 +70,9 @@ std::string single_level_implicit_warning(const Simulation& sim);
 /// iterations allow. A tolerance above unconverged_residual is named first, the iterations only below their maximum.
 std::string unconverged_implicit_warning(const Simulation& sim, float max_structural_strain, bool viewer,
                                          bool budget_limited = false);
+/// Whether that warning applies (the implicit solver, the strain and the last step's residual past their bounds),
+/// without composing it: `drape run --json`'s implicit.unconverged, and the viewer's per-frame check.
+bool implicit_unconverged(const Simulation& sim, float max_structural_strain) noexcept;
 inline constexpr double unconverged_residual = 0.1;
 inline constexpr float unconverged_strain = 0.3f;
 /// A warning when movable particles of the simulation's present state are inside a collider, deeper than half its

@@ -287,7 +287,7 @@ int run_command(const RunOptions& o) {
                          {"fas_at_rest", sp.implicit.fas_at_rest},
                          {"fas_last_step", st.fas}, // the last step's coarse levels solved with FAS
                          // the cloth strained past 30 % with the last step's residual above 0.1 (the stderr warning)
-                         {"unconverged", !unconverged_implicit_warning(sim, health.max_structural_strain, false).empty()},
+                         {"unconverged", implicit_unconverged(sim, health.max_structural_strain)},
                          {"multilevel", sp.implicit.multilevel},
                          {"levels", st.levels}, // grids the last step solved: 1 + coarse levels
                          {"method", sp.implicit.method == ImplicitMethod::jacobi ? "jacobi" : "gauss_seidel"}};
@@ -390,8 +390,9 @@ int run_command(const RunOptions& o) {
         std::cerr << "drape run: " << error << std::endl;
         return exit_code::non_finite;
     }
-    if (const std::string w = unconverged_implicit_warning(sim, health.max_structural_strain, false); !w.empty())
-        std::cerr << "drape run: warning: " << w << std::endl;
+    if (implicit_unconverged(sim, health.max_structural_strain))
+        std::cerr << "drape run: warning: " << unconverged_implicit_warning(sim, health.max_structural_strain, false)
+                  << std::endl;
     if (sp.strain_limit.ratio > 0.0f && !(health.max_limited_stretch <= 1.1f * sp.strain_limit.ratio))
         std::cerr << "drape run: warning: strain limit " << sp.strain_limit.ratio << " not honoured: max stretch "
                   << health.max_limited_stretch << " (more than 1.1 x the limit) after up to "

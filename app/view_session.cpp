@@ -688,10 +688,12 @@ void ViewSession::warn_about_settings(bool new_cloth) {
 void ViewSession::note_published_strain(float max_structural_strain) {
     // Not over a stopped simulation's error (the frame that posts it publishes too).
     if (!sim_ || step_open_ || !error_.empty()) return;
-    const bool budget_limited = budget_on_ && sim_->params().implicit.iterations < max_iterations_;
-    const std::string w = unconverged_implicit_warning(*sim_, max_structural_strain, true, budget_limited);
-    if (!w.empty() && !unconverged_warned_) post(MessageLevel::warning, w);
-    unconverged_warned_ = !w.empty();
+    const bool applies = implicit_unconverged(*sim_, max_structural_strain);
+    if (applies && !unconverged_warned_) {
+        const bool budget_limited = budget_on_ && sim_->params().implicit.iterations < max_iterations_;
+        post(MessageLevel::warning, unconverged_implicit_warning(*sim_, max_structural_strain, true, budget_limited));
+    }
+    unconverged_warned_ = applies;
 }
 
 double ViewSession::note_frame_time(double frame_ms) {

@@ -170,7 +170,8 @@ class ViewSession {
     /// polls and decides on the caller's thread, then runs the step on a thread of its own and returns whether it
     /// started one; finish_step() waits for it and does what advance() does after the step (errors, the iteration
     /// budget), returning the substeps run (0 when none was started). Between the two nothing else may touch the
-    /// session (the viewer only draws what it published before). The same bits as advance().
+    /// simulation, and of the session only note_frame_time (which reads the session's own fields); the viewer only
+    /// draws what it published before. The same bits as advance().
     bool start_step();
     std::size_t finish_step();
     /// Wall milliseconds of the last step (advance() or start_step()), measured on its own thread.
