@@ -59,6 +59,10 @@ echo '{"cloth": ' >"$tmpdir/malformed.json"
 expect_error "cloth.n" run --scene "$tmpdir/huge.json"
 expect_error "cloth.colour is not a known field" run --scene "$tmpdir/unknown.json"
 expect_error "malformed JSON" run --scene "$tmpdir/malformed.json"
+# Panels sewn across a gap with no sewing speed would snap shut and fling the cloth (found: 1.0e4 m/s, "healthy").
+echo '{"cloth": {"type": "outline", "outline": [[0, 0], [1, 0], [1, 1], [0, 1]], "spacing": 0.05,
+                 "copy": {"gap": 0.3, "sew": [[0, 3], [3, 0]]}}, "material": "cotton_shirting"}' >"$tmpdir/snap.json"
+expect_error "set a sewing speed (physics.sewing_speed, allowed (0, 10] m/s" run --scene "$tmpdir/snap.json" --steps 1
 expect_error "does not exist" run --scene "$tmpdir/missing.json"
 expect_error "--every" run --every 5
 expect_error "--size: '3.5' must be a whole number in [2, 4096]" run --size 3.5

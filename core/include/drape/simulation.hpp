@@ -121,6 +121,9 @@ struct SimulationParams {
     /// a seam 26 cm open snaps shut in one substep (its spring, or strain limiting, pulls the edges together at
     /// once), which flings the panels.
     float sewing_speed = 0.0f;
+    /// Without sewing, a seam may start at most this many of the cloth's mean edge lengths longer than its rest length
+    /// (Simulation refuses the cloth otherwise: it would snap shut and fling the panels).
+    static constexpr float seam_snap_ratio = 1.0f;
     /// Analytic colliders, positions relative to Cloth::origin; applied in order after strain limiting.
     std::vector<Collider> colliders;
     SelfCollision self_collision; ///< off by default (thickness 0)
@@ -375,6 +378,7 @@ class Simulation {
         return sewing_ ? std::array<float, 3>{0.0f, 0.0f, 0.0f} : params_.gravity;
     }
     void cook_sewing(const InitialState& initial);
+    void refuse_snapping_seams(const float* x, const float* y, const float* z) const;
     void update_sewing();
     /// Runs strain limiting on `out` when it is due this substep (returns false when not); with `with_collide`, the
     /// collide stage runs after every sweep (limit and collide interleaved, collide last).
