@@ -164,6 +164,10 @@ int main(int argc, char** argv) {
         ->check(in_range<std::uint32_t>(1, 1'000'000'000))
         ->needs(obj)
         ->capture_default_str();
+    cmd->add_flag("--overwrite", run.export_overwrite,
+                  "Remove the frame_*.obj files already in the --export-obj directory first (without it such a "
+                  "directory is refused)")
+        ->needs(obj);
     cmd->add_flag("--staged", run.staged, "Run each stage as its own pass instead of the fused pass");
     cmd->add_flag("--json", run.json, "Print exactly one JSON object on stdout");
 

@@ -1,5 +1,6 @@
 #include "obj_export.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstdio>
@@ -10,13 +11,42 @@
 
 namespace drape::app {
 
-ObjExporter::ObjExporter(const Cloth& cloth, std::string directory)
+namespace {
+
+/// frame_<5 or more digits>.obj: the names ObjExporter writes.
+bool is_frame_name(const std::string& name) {
+    if (name.size() < 15 || name.rfind("frame_", 0) != 0 || name.compare(name.size() - 4, 4, ".obj") != 0) return false;
+    for (std::size_t i = 6; i + 4 < name.size(); ++i)
+        if (name[i] < '0' || name[i] > '9') return false;
+    return true;
+}
+
+} // namespace
+
+ObjExporter::ObjExporter(const Cloth& cloth, std::string directory, bool overwrite)
     : directory_(std::move(directory)), publisher_(std::make_unique<Publisher>(cloth)),
       planes_(publisher_->output_floats()) {
     std::error_code ec;
     std::filesystem::create_directories(directory_, ec);
     if (ec || !std::filesystem::is_directory(directory_))
         throw WriteError("--export-obj: cannot create directory '" + directory_ + "': " + ec.message());
+    // Frames already there (an earlier export, or the user's own files of that name) would be overwritten in part,
+    // leaving a sequence that mixes two runs: refused unless --overwrite, which removes them all first.
+    std::vector<std::filesystem::path> frames;
+    for (const auto& entry : std::filesystem::directory_iterator(directory_, ec))
+        if (is_frame_name(entry.path().filename().string())) frames.push_back(entry.path());
+    if (ec) throw WriteError("--export-obj: cannot read directory '" + directory_ + "': " + ec.message());
+    if (frames.empty()) return;
+    std::sort(frames.begin(), frames.end());
+    if (!overwrite)
+        throw InvalidInput("--export-obj: '" + directory_ + "' already holds " + std::to_string(frames.size()) +
+                           " frame_*.obj file" + (frames.size() == 1 ? "" : "s") + " (" +
+                           frames.front().filename().string() +
+                           (frames.size() == 1 ? "" : " ... " + frames.back().filename().string()) +
+                           "); choose an empty or new directory, or add --overwrite to remove them first");
+    for (const auto& f : frames)
+        if (!std::filesystem::remove(f, ec) || ec)
+            throw WriteError("--export-obj --overwrite: cannot remove '" + f.string() + "': " + ec.message());
 }
 
 std::string ObjExporter::write(const Simulation& sim, std::size_t index) {

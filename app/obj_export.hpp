@@ -20,8 +20,10 @@ void write_obj_file(const std::string& path, const Simulation& sim, Publisher& p
 
 class ObjExporter {
   public:
-    /// Creates `directory` if needed; throws InvalidInput if it cannot be created or written.
-    ObjExporter(const Cloth& cloth, std::string directory);
+    /// Creates `directory` if needed; throws WriteError if it cannot be created or read. Frames already in it
+    /// (frame_<digits>.obj) are refused with InvalidInput, or removed first with `overwrite` (WriteError if one
+    /// cannot be); other files are never touched.
+    ObjExporter(const Cloth& cloth, std::string directory, bool overwrite = false);
     /// Writes <directory>/frame_<index, 5 digits>.obj for the current state; returns its path.
     std::string write(const Simulation& sim, std::size_t index);
 

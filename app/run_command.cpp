@@ -211,7 +211,7 @@ int run_command(const RunOptions& o) {
     std::unique_ptr<ObjExporter> exporter;
     std::size_t frames_written = 0;
     if (o.export_obj) {
-        exporter = std::make_unique<ObjExporter>(sim.cloth(), *o.export_obj);
+        exporter = std::make_unique<ObjExporter>(sim.cloth(), *o.export_obj, o.export_overwrite);
         workers.run([&] { exporter->write(sim, frames_written++); });
     }
 

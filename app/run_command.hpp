@@ -39,6 +39,7 @@ struct RunOptions {
     std::optional<std::uint32_t> self_collision_substeps; ///< implicit sub-steps of a step in contact (1 = none)
     std::optional<std::string> export_obj; ///< directory for OBJ frames
     std::uint32_t export_every = 100;      ///< substeps between exported frames
+    bool export_overwrite = false;         ///< remove the frame_*.obj files already in export_obj first
     bool json = false;
 };
 

@@ -337,6 +337,18 @@ if [ "$frames" != 4 ] || ! grep -q "^f " "$tmpdir/obj/frame_00003.obj"; then
 else
     echo "ok: --export-obj -> $frames frames"
 fi
+# A directory that already holds frames is refused (a later, shorter run overwrote some and left the rest: a mixed
+# sequence, and a user's own frame_00000.obj lost); --overwrite removes them all first and touches nothing else.
+echo "mine" >"$tmpdir/obj/notes.txt"
+expect_error "already holds 4 frame_*.obj files (frame_00000.obj ... frame_00003.obj); choose an empty or new directory, or add --overwrite" \
+    run --scene sphere --steps 5 --export-obj "$tmpdir/obj"
+"$DRAPE" run --scene sphere --steps 5 --export-obj "$tmpdir/obj" --overwrite >"$out" 2>"$err"
+if [ $? != 0 ] || [ "$(ls "$tmpdir/obj" | tr '\n' ' ')" != "frame_00000.obj frame_00001.obj notes.txt " ]; then
+    echo "FAIL: --overwrite left: $(ls "$tmpdir/obj" | tr '\n' ' ')"; cat "$err"; fail=1
+else
+    echo "ok: --export-obj --overwrite -> $(ls "$tmpdir/obj" | tr '\n' ' ')"
+fi
+expect_error "--overwrite" run --steps 1 --overwrite
 
 # A mesh cloth from an OBJ file (scenes/examples/mesh_disc.json -> tests/data/disc.obj, 469 vertices) runs and exports
 # (0.1 s: 2,268 steps, 24 frames; 0.5 s took 48 s under ASan).

@@ -178,6 +178,22 @@ TEST(Fabric, ValidateNamesFieldUnitAndRange) {
     }
     f.damping = 0.02f;
     EXPECT_NO_THROW(validate_fabric(f, "c.json: material"));
+    // A grid's springs take stretch_u as the reference, a mesh's the mean of the two: the larger one decides here, and
+    // the limit itself (1e3 N*s/m / 1e6 N/m = 0.001 s) is allowed though 0.001 in float times 1e6 is 1000.00005 (an
+    // adversarial sweep found 0.0011 s passed here and was refused on the grid as "material.structural.damping").
+    f.stretch_u = 1e6f;
+    f.stretch_v = 10.0f;
+    f.shear = 0.01f;
+    f.damping = 0.001f;
+    EXPECT_NO_THROW(validate_fabric(f, "m"));
+    f.damping = 0.0011f;
+    try {
+        validate_fabric(f, "m");
+        FAIL() << "accepted damping 0.0011 s at stretch_u 1e6 N/m";
+    } catch (const InvalidInput& e) {
+        EXPECT_TRUE(has(e.what(), "m.damping = 0.0011 s")) << e.what();
+        EXPECT_TRUE(has(e.what(), "at most 0.001 s for this fabric")) << e.what();
+    }
 }
 
 TEST(Fabric, SceneMaterialAsPresetName) {

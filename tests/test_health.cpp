@@ -275,3 +275,26 @@ TEST(CollideHealth, PointThatStartedInsideIsHeldNotTeleported) {
     // Speed never grows either way: the response only removes velocity.
     EXPECT_LE(vx2 * vx2 + vy2 * vy2 + vz2 * vz2, 1.0f + 4.0f);
 }
+
+// Found by an adversarial sweep: a saved state with one particle of a 10 cm cloth at 1e6 m (in range) ran at 1.6e9 m/s
+// and was "healthy", the monitor's bounds taking in what the start holds. A start stretched beyond the monitor's own
+// ceiling is refused, naming the spring and the bound; one stretched within it runs.
+TEST(HealthMonitor, StartStretchedBeyondTheCeilingIsRefused) {
+    SceneSpec spec = load_scene("hang");
+    spec.grid.n = 8;
+    BuiltScene b = build_scene(spec);
+    BuiltScene ok = b;
+    ok.initial.x[9] += 0.5f; // an interior particle 0.5 m off: its springs (rest ~0.14 m) stretched about 3.5 times
+    EXPECT_NO_THROW(Simulation(std::move(ok.cloth), ok.initial, ok.params));
+    b.initial.x[9] += 10.0f; // ~70 times
+    try {
+        Simulation sim(std::move(b.cloth), b.initial, b.params);
+        ADD_FAILURE() << "a start stretched 70 times was accepted";
+    } catch (const InvalidInput& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("the initial state stretches the structural spring between particles"), std::string::npos)
+            << what;
+        EXPECT_NE(what.find("at most 50 (5000 %)"), std::string::npos) << what;
+        EXPECT_NE(what.find("state.positions"), std::string::npos) << what;
+    }
+}

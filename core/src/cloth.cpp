@@ -15,7 +15,7 @@ void check_material(SpringKind kind, const SpringMaterial& m) {
     if (!(m.stiffness >= 0.0f && m.stiffness <= 1e6f))
         throw InvalidInput(std::string("material.") + spring_kind_name(kind) + ".stiffness = " +
                            std::to_string(m.stiffness) + " N/m is outside the allowed range [0, 1e6]");
-    if (!(m.damping >= 0.0f && m.damping <= 1e3f))
+    if (!(m.damping >= 0.0f && m.damping <= 1e3f * (1.0f + 1e-6f))) // the fabric's limit, rounded in float, is allowed
         throw InvalidInput(std::string("material.") + spring_kind_name(kind) + ".damping = " +
                            std::to_string(m.damping) + " N*s/m is outside the allowed range [0, 1e3]");
 }

@@ -114,6 +114,33 @@ void validate_params(const SimulationParams& p) {
     }
 }
 
+// A start stretched beyond what the health monitor lets a running cloth reach (HealthMonitor::strain_ceiling) cannot
+// come from a healthy run, and the monitor's bounds, which include what the start holds, would then pass anything:
+// a saved state with one corner of a 10 cm cloth at 1e6 m (in range) ran at 1.6e9 m/s, "healthy". Refused.
+void Simulation::refuse_overstretched_start(const InitialState& initial) const {
+    double worst = 0.0;
+    const Edge* worst_edge = nullptr;
+    for (const Edge& e : cloth_.edges) {
+        if (e.kind != SpringKind::structural || !(e.rest > 0.0f)) continue;
+        const double dx = double(initial.x[e.b]) - initial.x[e.a], dy = double(initial.y[e.b]) - initial.y[e.a],
+                     dz = double(initial.z[e.b]) - initial.z[e.a];
+        const double strain = std::sqrt(dx * dx + dy * dy + dz * dz) / double(e.rest) - 1.0;
+        if (strain > worst) {
+            worst = strain;
+            worst_edge = &e;
+        }
+    }
+    if (worst_edge == nullptr || !(worst > HealthMonitor::strain_ceiling)) return;
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "the initial state stretches the structural spring between particles %u and %u to %.4g times its rest "
+                  "length of %.3g m (strain %.4g); a cloth may start stretched at most %g (%g %%): check the state's "
+                  "positions (a scene file's state.positions)",
+                  unsigned(worst_edge->a), unsigned(worst_edge->b), worst + 1.0, double(worst_edge->rest), worst,
+                  HealthMonitor::strain_ceiling, 100.0 * HealthMonitor::strain_ceiling);
+    throw InvalidInput(text);
+}
+
 Simulation::Simulation(Cloth cloth, const InitialState& initial, const SimulationParams& params)
     : cloth_(std::move(cloth)) {
     const std::size_t n = cloth_.particle_count;
@@ -128,6 +155,7 @@ Simulation::Simulation(Cloth cloth, const InitialState& initial, const Simulatio
                 throw InvalidInput(std::string("initial state field ") + names[f] + " of particle " +
                                    std::to_string(i) + " is not finite");
     }
+    refuse_overstretched_start(initial);
     kernel_ = resolve_params(params);
     params_ = params;
 

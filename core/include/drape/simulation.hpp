@@ -379,6 +379,7 @@ class Simulation {
     }
     void cook_sewing(const InitialState& initial);
     void refuse_snapping_seams(const float* x, const float* y, const float* z) const;
+    void refuse_overstretched_start(const InitialState& initial) const;
     void update_sewing();
     /// Runs strain limiting on `out` when it is due this substep (returns false when not); with `with_collide`, the
     /// collide stage runs after every sweep (limit and collide interleaved, collide last).
