@@ -201,4 +201,30 @@ TEST(TShirtSewn, HemDraggedThirtyCentimetresAndReleasedStaysOn) {
     EXPECT_LT(sim.z()[hem], p0[2] + 0.1f) << "the hem did not fall back";
 }
 
+// A saved state's seam_rest (state.seam_rest) must lie within one mean edge of its seam's length: found by an
+// adversarial sweep, 1e-30 m (the seam snapped shut) and 100 m (pushed the panels apart) were taken and the run
+// stopped blaming "the state was changed from outside the simulation". The T-shirt's seams start 0.26 m open.
+TEST(TShirtSewn, SavedSeamRestOffItsSeamIsRefused) {
+    SceneSpec spec = load_scene("tshirt");
+    const BuiltScene b = build_scene(spec);
+    const std::size_t seams = b.cloth.seams.a.size();
+    auto start = [&](float rest0) {
+        InitialState st = b.initial;
+        st.seam_rest.assign(seams, 0.26f); // on schedule: sewing starts from the positions
+        st.seam_rest[0] = rest0;
+        Simulation sim(b.cloth, st, b.params);
+    };
+    EXPECT_NO_THROW(start(0.26f));
+    for (const auto& [rest0, what] : {std::pair{0.1f, "shorter than that seam"}, std::pair{100.0f, "longer than"}}) {
+        try {
+            start(rest0);
+            ADD_FAILURE() << "seam_rest[0] = " << rest0 << " m accepted";
+        } catch (const InvalidInput& e) {
+            EXPECT_NE(std::string(e.what()).find(std::string("initial state seam_rest[0] = ")), std::string::npos)
+                << e.what();
+            EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+        }
+    }
+}
+
 } // namespace

@@ -20,8 +20,11 @@ namespace drape {
 // Without sewing a seam is at its rest length from the start. One that starts open (two panels placed apart) then
 // closes in a step or two, and its stretch energy flings the cloth: two canvas panels sewn across a 0.3 m gap reached
 // 3,960 m/s and a structural strain of 12.7 in 1 s, within the health monitor's bounds, which include the energy the
-// start holds. So a seam that starts (or, sewing switched off mid-run, is) longer than seam_snap_ratio times the cloth's mean edge is refused, with the remedy.
-void Simulation::refuse_snapping_seams(const float* x, const float* y, const float* z) const {
+// start holds. So a seam more than seam_snap_ratio times the cloth's mean edge longer than its rest length (its own
+// without sewing, also when sewing is switched off mid-run; a saved state's seam_rest with sewing) is refused, with
+// the remedy; so is a saved seam_rest that long beyond its seam (it would push the panels apart: 100 m was taken).
+void Simulation::refuse_seams_off_schedule(const float* x, const float* y, const float* z,
+                                           std::span<const float> saved_rest) const {
     const SeamSet& s = cloth_.seams;
     double edge_sum = 0.0;
     std::size_t edges = 0;
@@ -31,26 +34,37 @@ void Simulation::refuse_snapping_seams(const float* x, const float* y, const flo
             ++edges;
         }
     if (edges == 0) return;
-    const double mean_edge = edge_sum / double(edges), limit = double(SimulationParams::seam_snap_ratio) * mean_edge;
-    double longest = 0.0;
-    std::size_t worst = 0;
+    const double limit = double(SimulationParams::seam_snap_ratio) * edge_sum / double(edges);
+    double worst = 0.0;
+    std::size_t at = 0;
     for (std::size_t k = 0; k < s.a.size(); ++k) {
         const double dx = double(x[s.b[k]]) - x[s.a[k]], dy = double(y[s.b[k]]) - y[s.a[k]],
                      dz = double(z[s.b[k]]) - z[s.a[k]];
-        const double open = std::sqrt(dx * dx + dy * dy + dz * dz) - double(s.rest[k]);
-        if (open > longest) {
-            longest = open;
-            worst = k;
+        const double rest = saved_rest.empty() ? double(s.rest[k]) : std::max(double(s.rest[k]), double(saved_rest[k]));
+        const double off = std::sqrt(dx * dx + dy * dy + dz * dz) - rest; // > 0: open, < 0: pushed apart
+        if (std::fabs(off) > std::fabs(worst)) {
+            worst = off;
+            at = k;
         }
     }
-    if (!(longest > limit)) return;
-    char text[512];
-    std::snprintf(text, sizeof text,
-                  "a seam starts %.3g m open (particles %u and %u) and the sewing speed is 0, so it would snap shut in "
-                  "one step and fling the cloth; set a sewing speed (physics.sewing_speed, allowed (0, 10] m/s; the "
-                  "built-in T-shirt sews at 0.5) to draw the seams shut, or place the panels closer: without sewing a "
-                  "seam may start at most %.3g m open (%g x the cloth's mean edge)",
-                  longest, unsigned(s.a[worst]), unsigned(s.b[worst]), limit, double(SimulationParams::seam_snap_ratio));
+    if (!(std::fabs(worst) > limit)) return;
+    char text[640];
+    if (saved_rest.empty())
+        std::snprintf(text, sizeof text,
+                      "a seam starts %.3g m open (particles %u and %u) and the sewing speed is 0, so it would snap shut "
+                      "in one step and fling the cloth; set a sewing speed (physics.sewing_speed, allowed (0, 10] m/s; "
+                      "the built-in T-shirt sews at 0.5) to draw the seams shut, or place the panels closer: without "
+                      "sewing a seam may start at most %.3g m open (%g x the cloth's mean edge)",
+                      worst, unsigned(s.a[at]), unsigned(s.b[at]), limit, double(SimulationParams::seam_snap_ratio));
+    else
+        std::snprintf(text, sizeof text,
+                      "initial state seam_rest[%zu] = %.4g m is %.3g m %s than that seam (particles %u and %u), so it "
+                      "would %s; a saved seam's current rest length lies within %.3g m (%g x the cloth's mean edge) of "
+                      "its length (state.seam_rest in scene files; leave it out to start sewing from the positions)",
+                      at, double(saved_rest[at]), std::fabs(worst), worst > 0.0 ? "shorter" : "longer",
+                      unsigned(s.a[at]), unsigned(s.b[at]),
+                      worst > 0.0 ? "snap shut and fling the cloth" : "push the panels apart", limit,
+                      double(SimulationParams::seam_snap_ratio));
     throw InvalidInput(text);
 }
 
@@ -62,14 +76,17 @@ void Simulation::cook_sewing(const InitialState& initial) {
                            " entries, expected one per seam (" + std::to_string(s.a.size()) + ")");
     seam_rest_ = s.rest;
     const bool sew = params_.sewing_speed > 0.0f;
-    if (!sew) refuse_snapping_seams(initial.x.data(), initial.y.data(), initial.z.data());
+    for (std::size_t k = 0; k < initial.seam_rest.size() && sew; ++k)
+        if (!(std::isfinite(initial.seam_rest[k]) && initial.seam_rest[k] > 0.0f))
+            throw InvalidInput("initial state seam_rest[" + std::to_string(k) + "] is " +
+                               std::to_string(initial.seam_rest[k]) + " (must be a finite length > 0 m)");
+    if (!sew || !initial.seam_rest.empty())
+        refuse_seams_off_schedule(initial.x.data(), initial.y.data(), initial.z.data(),
+                                  sew ? std::span<const float>(initial.seam_rest) : std::span<const float>());
     for (std::size_t k = 0; k < s.a.size() && sew; ++k) {
         float start = 0.0f;
         if (!initial.seam_rest.empty()) {
             start = initial.seam_rest[k]; // a saved state: sewing resumes where it was
-            if (!(std::isfinite(start) && start > 0.0f))
-                throw InvalidInput("initial state seam_rest[" + std::to_string(k) + "] is " + std::to_string(start) +
-                                   " (must be a finite length > 0 m)");
         } else {
             const double dx = double(initial.x[s.b[k]]) - initial.x[s.a[k]],
                          dy = double(initial.y[s.b[k]]) - initial.y[s.a[k]],

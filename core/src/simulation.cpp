@@ -251,7 +251,7 @@ KernelPath Simulation::resolve_params(const SimulationParams& params) const {
 void Simulation::set_params(const SimulationParams& params) {
     const KernelPath kernel = resolve_params(params);
     if (sewing_ && !(params.sewing_speed > 0.0f)) // seams still open would snap shut
-        refuse_snapping_seams(x().data(), y().data(), z().data());
+        refuse_seams_off_schedule(x().data(), y().data(), z().data(), {});
     // The last step's velocities stop being this solver's history only when the solver, dt or integrator changes (the
     // viewer sets parameters on any edit: a wind or friction change must not re-guess a resting cloth).
     // A collider taken away or moved may leave a cloth that rested on it held by nothing (as a pin let go,
