@@ -170,6 +170,10 @@ void apply_solver_flags(SceneSpec& spec, const SolverFlags& f) {
             throw InvalidInput(std::string(flag) + ": the coarse correction of the multilevel guess, but the multilevel "
                                "guess is off" + (f.single_level ? " (--single-level)" : " (the scene's "
                                "physics.implicit.multilevel)") + "; drop one of them");
+    if (f.fas_at_rest && (f.fas || spec.physics.implicit.fas))
+        throw InvalidInput(std::string("--fas-at-rest: FAS when the cloth is at rest, but ") +
+                           (f.fas ? "--fas" : "the scene's physics.implicit.fas") +
+                           " already runs it on every step; drop one of them");
     if (f.iterations) spec.physics.implicit.iterations = *f.iterations;
     if (f.tolerance) spec.physics.implicit.tolerance = *f.tolerance;
     if (f.fas) spec.physics.implicit.fas = true;

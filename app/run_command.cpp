@@ -204,6 +204,19 @@ int run_command(const RunOptions& o) {
             throw InvalidInput(std::string(flag) + ": the coarse correction of the multilevel guess, but this cloth "
                                "has no coarse levels (only square grids of the fabric model, 10 x 10 and up, and "
                                "outline cloths of the fabric model have them); drop " + flag);
+    // FAS at rest never acts where its measured faults are (implicit_step.cpp, fas_at_rest): say so, not accept it.
+    if (o.fas_at_rest) {
+        const SimulationParams& p = sim.params();
+        const char* why = !p.colliders.empty()                ? "colliders"
+                          : p.self_collision.thickness > 0.0f ? "self-collision"
+                          : p.wind.enabled                    ? "wind"
+                          : p.aero.enabled                    ? "aerodynamic wind"
+                                                              : nullptr;
+        if (why)
+            throw InvalidInput(std::string("--fas-at-rest: FAS at rest never acts with colliders, self-collision, "
+                                           "wind or aerodynamic wind (docs/implicit.md, \"FAS at rest\"), and this "
+                                           "scene has ") + why + "; drop --fas-at-rest");
+    }
     for (const std::string& w : {single_level_implicit_warning(sim), self_collision_thickness_warning(sim),
                                  started_inside_warning(sim)})
         if (!w.empty()) std::cerr << "drape run: warning: " << w << "\n";

@@ -59,6 +59,8 @@ echo '{"cloth": ' >"$tmpdir/malformed.json"
 expect_error "cloth.n" run --scene "$tmpdir/huge.json"
 expect_error "cloth.colour is not a known field" run --scene "$tmpdir/unknown.json"
 expect_error "malformed JSON" run --scene "$tmpdir/malformed.json"
+expect_error "this scene has colliders; drop --fas-at-rest" run --scene sphere --solver implicit --fas-at-rest --steps 1
+expect_error "--fas already runs it on every step" run --solver implicit --fas --fas-at-rest --steps 1
 # Panels sewn across a gap with no sewing speed would snap shut and fling the cloth (found: 1.0e4 m/s, "healthy").
 echo '{"cloth": {"type": "outline", "outline": [[0, 0], [1, 0], [1, 1], [0, 1]], "spacing": 0.05,
                  "copy": {"gap": 0.3, "sew": [[0, 3], [3, 0]]}}, "material": "cotton_shirting"}' >"$tmpdir/snap.json"
