@@ -148,7 +148,7 @@ struct Health {
     bool finite = true;
     float max_speed = 0.0f;             ///< m/s, the fastest particle
     /// Largest stretch (l - l0) / l0 over the springs strain limiting acts on (structural, seam; shear with the explicit
-    /// solver only); 0 without them.
+    /// solver only), leaving out springs between two fixed particles (nothing can move them); 0 without them.
     float max_limited_stretch = 0.0f;
     HealthFigures monitor;              ///< the monitor's last check: figures, bounds, healthy
 };
