@@ -59,6 +59,9 @@ echo '{"cloth": ' >"$tmpdir/malformed.json"
 expect_error "cloth.n" run --scene "$tmpdir/huge.json"
 expect_error "cloth.colour is not a known field" run --scene "$tmpdir/unknown.json"
 expect_error "malformed JSON" run --scene "$tmpdir/malformed.json"
+# A limit applied every 100 substeps blows the hang up; the advice names --strain-every (it blamed the ratio).
+expect_exit 4 "applied only every 100 substeps, its corrections too large for the springs: lower physics.strain_limit.every (--strain-every" \
+    run --scene hang --size 30 --strain-limit 0.01 --strain-every 100 --sim-seconds 1
 expect_error "this scene has colliders; drop --fas-at-rest" run --scene sphere --solver implicit --fas-at-rest --steps 1
 expect_error "--fas already runs it on every step" run --solver implicit --fas --fas-at-rest --steps 1
 # Panels sewn across a gap with no sewing speed would snap shut and fling the cloth (found: 1.0e4 m/s, "healthy").

@@ -291,9 +291,9 @@ TEST(Collider, RejectsBadParametersNamingTheField) {
     };
     EXPECT_NE(msg([] {
                   make_sphere({0, 0, 0}, 0.0f);
-              }).find("sphere.radius = 0.000000 m is outside the allowed range (0, 1000.000000]"),
+              }).find("sphere.radius = 0 m is outside the allowed range (0, 1000]"),
               std::string::npos);
-    EXPECT_NE(msg([] { make_sphere({0, 0, 0}, 2000.0f); }).find("(0, 1000.000000]"), std::string::npos);
+    EXPECT_NE(msg([] { make_sphere({0, 0, 0}, 2000.0f); }).find("(0, 1000]"), std::string::npos);
     EXPECT_NE(msg([] { make_sphere({0, 0, 0}, NAN); }).find("sphere.radius = nan m"), std::string::npos);
     EXPECT_NE(msg([] {
                   make_sphere({0, 0, 0}, 1.0f, {-0.1f, 0.2f});
@@ -301,7 +301,7 @@ TEST(Collider, RejectsBadParametersNamingTheField) {
               std::string::npos);
     EXPECT_NE(msg([] {
                   make_sphere({0, 0, 0}, 1.0f, {0.1f, 1.5f});
-              }).find("[0.000000, 1.000000]"),
+              }).find("[0, 1]"),
               std::string::npos);
     EXPECT_NE(msg([] { make_disc({0, 0, 0}, 1.0f, 0.0f); }).find("disc.height"), std::string::npos);
     EXPECT_NE(msg([] {

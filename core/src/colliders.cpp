@@ -35,7 +35,7 @@ void check_size(const std::string& name, float value) { check_positive(name, val
 void check_point(const std::string& name, const Vec3f& p) {
     for (int k = 0; k < 3; ++k)
         if (!(std::abs(p[k]) <= max_extent))
-            throw InvalidInput(name + "[" + std::to_string(k) + "] = " + std::to_string(p[k]) +
+            throw InvalidInput(name + "[" + std::to_string(k) + "] = " + range_number(p[k]) +
                                " m is outside the allowed range [-1000, 1000]");
 }
 
@@ -310,7 +310,7 @@ void check_collider(const Collider& c) {
     case ColliderKind::plane: {
         const float len = std::sqrt(dot3(c.axis, c.axis));
         if (!(std::abs(len - 1.0f) <= 1e-4f))
-            throw InvalidInput(pre + "normal has length " + std::to_string(len) + " (must be 1 within 1e-4)");
+            throw InvalidInput(pre + "normal has length " + range_number(len) + " (must be 1 within 1e-4)");
         break;
     }
     case ColliderKind::sphere:
@@ -335,12 +335,12 @@ void check_collider(const Collider& c) {
                 const float d = R[i] * R[j] + R[3 + i] * R[3 + j] + R[6 + i] * R[6 + j];
                 if (!(std::abs(d - (i == j ? 1.0f : 0.0f)) <= 1e-4f))
                     throw InvalidInput(pre + "rotation is not orthonormal (columns " + std::to_string(i) +
-                                       " . " + std::to_string(j) + " = " + std::to_string(d) + ")");
+                                       " . " + std::to_string(j) + " = " + range_number(d) + ")");
             }
         const float det = R[0] * (R[4] * R[8] - R[5] * R[7]) - R[1] * (R[3] * R[8] - R[5] * R[6]) +
                           R[2] * (R[3] * R[7] - R[4] * R[6]);
         if (!(det > 0.0f))
-            throw InvalidInput(pre + "rotation has determinant " + std::to_string(det) +
+            throw InvalidInput(pre + "rotation has determinant " + range_number(det) +
                                " (must be +1: no mirroring)");
         break;
     }
@@ -355,7 +355,7 @@ Collider make_plane(Vec3f point, Vec3f normal, ColliderSurface surface) {
     c.centre = point;
     const float len = std::sqrt(dot3(normal, normal));
     if (!(len > 0.0f) || !std::isfinite(len))
-        throw InvalidInput("plane.normal has length " + std::to_string(len) + " (must be > 0)");
+        throw InvalidInput("plane.normal has length " + range_number(len) + " (must be > 0)");
     c.axis = {normal[0] / len, normal[1] / len, normal[2] / len};
     check_collider(c);
     return c;
@@ -415,7 +415,7 @@ std::array<float, 9> rotation_about_axis(Vec3f axis, float angle) {
     const double len =
         std::sqrt(double{axis[0]} * axis[0] + double{axis[1]} * axis[1] + double{axis[2]} * axis[2]);
     if (!(len > 0.0) || !std::isfinite(len))
-        throw InvalidInput("rotation axis has length " + std::to_string(len) + " (must be > 0)");
+        throw InvalidInput("rotation axis has length " + range_number(len) + " (must be > 0)");
     if (!std::isfinite(angle)) throw InvalidInput("rotation angle is not finite");
     const double x = axis[0] / len, y = axis[1] / len, z = axis[2] / len;
     const double c = std::cos(double{angle}), s = std::sin(double{angle}), C = 1.0 - c;

@@ -297,6 +297,12 @@ std::string HealthMonitor::check(const Cloth& cloth, const SimulationParams& par
             << " m) against the cloth's spacing (mean structural spring " << spacing
             << " m): layers or panels closer than the thickness are pushed apart at once; lower "
                "physics.self_collision.thickness (--self-collision)";
+    else if (params.strain_limit.ratio > 0.0f && params.strain_limit.every > 1 && !implicit)
+        // A limit applied every K substeps moves particles by K substeps' worth of stretch at once, and the springs
+        // answer with that displacement as velocity (found: --strain-limit 0.01 --strain-every 100 on the hang).
+        msg << "the strain limit (" << params.strain_limit.ratio << ") applied only every " << params.strain_limit.every
+            << " substeps, its corrections too large for the springs: lower physics.strain_limit.every "
+               "(--strain-every, 1 = every substep) or raise the ratio";
     else if (params.strain_limit.ratio > 0.0f)
         msg << "the strain limit (" << params.strain_limit.ratio
             << ") fighting the springs: raise the ratio or the passes, or lower the stiffness";

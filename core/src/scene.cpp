@@ -1051,9 +1051,16 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
         // Node mass in seed 000's range 0.001 - 1 g.
         const HangParams& g = s.grid;
         const double node_mass = double(g.total_mass) / (double(g.n) * g.n);
-        if (!(node_mass >= 1e-6 * 0.999 && node_mass <= 1e-3 * 1.001))
-            cloth.fail(cloth.at("mass"), "gives a node mass of " + format_number(node_mass * 1000.0) +
-                                             " g; allowed range [0.001, 1] g per particle (seed 000)");
+        if (!(node_mass >= 1e-6 * 0.999 && node_mass <= 1e-3 * 1.001)) {
+            if (cloth.has("mass"))
+                cloth.fail(cloth.at("mass"), "gives a node mass of " + format_number(node_mass * 1000.0) +
+                                                 " g; allowed range [0.001, 1] g per particle (seed 000)");
+            // Not in the file: say where the mass came from (it read "cloth.mass gives ..." of a field not there).
+            cloth.fail(cloth.at("n"), "gives the default cloth mass of " + format_number(double(g.total_mass)) +
+                                          " kg a node mass of " + format_number(node_mass * 1000.0) +
+                                          " g; allowed range [0.001, 1] g per particle (seed 000): set " +
+                                          cloth.at("mass") + " (kg) or a fabric material");
+        }
     }
 
     // physics
