@@ -254,6 +254,8 @@ int run_command(const RunOptions& o) {
     progress.clear();
     const double wall = std::chrono::duration<double>(clock_type::now() - start).count();
     const Health health = workers.run([&] { return sim.health(); });
+    // The monitor has figures once it has checked (every HealthMonitor::check_every substeps, or a rebaseline).
+    const bool monitor_checked = health.monitor.energy_bound > 0.0 || health.monitor.substep > 0;
     const std::uint64_t done = sim.steps_done();
     const double rate = wall > 0.0 ? double(particles) * double(done) / wall : 0.0;
     const double real_time = wall > 0.0 ? sim.time() / wall : 0.0; // simulated seconds per wall second
@@ -332,7 +334,8 @@ int run_command(const RunOptions& o) {
     j["finite"] = health.finite && error.empty();
     j["healthy"] = health.finite && error.empty() && blow_up.empty();
     if (!blow_up.empty()) j["health_error"] = blow_up;
-    j["health"] = {{"substep", health.monitor.substep},
+    j["health"] = {{"checked", monitor_checked},
+                   {"substep", health.monitor.substep},
                    {"kinetic_energy", health.monitor.kinetic_energy},
                    {"energy_bound", health.monitor.energy_bound},
                    {"max_strain", health.monitor.max_strain},
@@ -388,12 +391,16 @@ int run_command(const RunOptions& o) {
         std::printf("  max structural strain %.4f, kinetic energy %.4g J, finite %s, checksum %s\n",
                     double(health.max_structural_strain), health.kinetic_energy,
                     (health.finite && error.empty()) ? "yes" : "no", hex64(sim.checksum()).c_str());
-        std::printf("  healthy %s (last check at substep %zu: kinetic energy %.4g J of %.4g, strain %.4g of %.4g, "
-                    "speed %.4g of %.4g m/s)\n",
-                    blow_up.empty() && error.empty() ? "yes" : "no", health.monitor.substep,
-                    health.monitor.kinetic_energy, health.monitor.energy_bound, double(health.monitor.max_strain),
-                    double(health.monitor.strain_bound), double(health.monitor.max_speed),
-                    double(health.monitor.speed_bound));
+        if (monitor_checked)
+            std::printf("  healthy %s (last check at substep %zu: kinetic energy %.4g J of %.4g, strain %.4g of %.4g, "
+                        "speed %.4g of %.4g m/s)\n",
+                        blow_up.empty() && error.empty() ? "yes" : "no", health.monitor.substep,
+                        health.monitor.kinetic_energy, health.monitor.energy_bound, double(health.monitor.max_strain),
+                        double(health.monitor.strain_bound), double(health.monitor.max_speed),
+                        double(health.monitor.speed_bound));
+        else // stopped before the monitor's first check: its figures would read 0 of 0
+            std::printf("  healthy %s (the health monitor had not checked yet: it checks every %zu substeps)\n",
+                        blow_up.empty() && error.empty() ? "yes" : "no", HealthMonitor::check_every);
     }
     if (!blow_up.empty()) {
         std::cerr << "drape run: " << blow_up << std::endl;
