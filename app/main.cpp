@@ -286,7 +286,12 @@ int main(int argc, char** argv) {
     } catch (const CLI::CallForVersion& e) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
-        std::fprintf(stderr, "drape: %s (see drape %s--help)\n", e.what(),
+        // A flag given twice reads "--size: At Most 1 required but received 2" in CLI11's words: say it in ours.
+        std::string what = e.what();
+        const std::string twice = ": At Most 1 required but received ";
+        if (const std::size_t at = what.find(twice); at != std::string::npos)
+            what = what.substr(0, at) + " given " + what.substr(at + twice.size()) + " times; give it once";
+        std::fprintf(stderr, "drape: %s (see drape %s--help)\n", what.c_str(),
                      cmd->parsed() ? "run " : view_cmd->parsed() ? "view " : "");
         return 2;
     }

@@ -31,6 +31,7 @@ expect_error() { expect_exit 2 "$@"; } # expect_error "what must appear in the m
 expect_error "--size" run --size 1
 expect_error "[2, 4096]" run --size 5000
 expect_error "--size" run --size abc
+expect_error "--size given 2 times; give it once" run --size 40 --size 9
 expect_error "--threads" run --threads 0
 expect_error "--dt" run --dt -1
 expect_error "--self-collision" run --self-collision 0.2
