@@ -136,6 +136,8 @@ expect_error "gravity.json: physics.gravity[1] = -1e400 is not a finite number; 
 expect_error "digits.json: cloth.n = 10000000000" run --scene "$tmpdir/digits.json"
 expect_error "nan.json: cloth.size = NaN is not a finite number; allowed range [0.01, 100] m" run --scene "$tmpdir/nan.json"
 expect_error "inf.json: material.stiffness = Infinity is not a finite number" run --scene "$tmpdir/inf.json"
+echo '{"cloth": {"n": 2, "size": 0.1}, "material": "wool", "state": {"positions": [[NaN, 0, 0], [0.1, 0, 0], [0, 0, 0.1], [0.1, 0, 0.1]], "velocities": [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]], "pinned": []}}' >"$tmpdir/state_nan.json"
+expect_error "state.positions[0][0] = NaN is not a finite number; allowed range [-1e+06, 1e+06] m" run --scene "$tmpdir/state_nan.json"
 
 # The scene path is checked before it is opened: a FIFO does not hang, a directory is not "larger than 16 MiB".
 mkfifo "$tmpdir/fifo.json"

@@ -791,6 +791,9 @@ SceneState read_state(ObjectReader& st) {
                 st.fail(st.at(key) + "[" + std::to_string(i) + "]", "must be [x, y, z], three numbers");
             float* dst[3] = {&x[i], &y[i], &z[i]};
             for (int k = 0; k < 3; ++k) {
+                // NaN or 1e400 written in the file: named with the range (the safety net below has none).
+                st.check_finite(st.at(key) + "[" + std::to_string(i) + "][" + std::to_string(k) + "]",
+                                "[-1e+06, 1e+06]" + std::string(unit));
                 const double d = v[k].is_number() ? v[k].get<double>() : std::nan("");
                 if (!(std::fabs(d) <= state_limit))
                     st.fail(st.at(key) + "[" + std::to_string(i) + "][" + std::to_string(k) + "]",
