@@ -145,7 +145,7 @@ mkdir "$tmpdir/dir.json"
 head -c $((16 * 1024 * 1024 + 1)) /dev/zero >"$tmpdir/big.json"
 expect_error "fifo.json: is not a regular file (a FIFO)" run --scene "$tmpdir/fifo.json"
 expect_error "dir.json: is a directory" run --scene "$tmpdir/dir.json"
-expect_error "big.json: the file is 16.0 MiB; scene files are limited to 16 MiB" run --scene "$tmpdir/big.json"
+expect_error "big.json: the file is 16777217 bytes (16.00 MiB); scene files are limited to 16 MiB (16777216 bytes)" run --scene "$tmpdir/big.json"
 cp "$tmpdir/unknown.json" "$tmpdir/locked.json"
 chmod 000 "$tmpdir/locked.json"
 if [ "$(id -u)" != 0 ]; then

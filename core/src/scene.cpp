@@ -1181,9 +1181,11 @@ SceneSpec load_scene(const std::string& name_or_path) {
     if (S_ISDIR(st.st_mode)) throw InvalidInput(path + ": is a directory, not a scene file");
     if (!S_ISREG(st.st_mode)) throw InvalidInput(path + ": is not a regular file (" + kind(st.st_mode) + ")");
     const auto too_big = [&](std::uintmax_t bytes) {
-        char mib[32];
-        std::snprintf(mib, sizeof mib, "%.1f", double(bytes) / (1024.0 * 1024.0));
-        return InvalidInput(path + ": the file is " + mib + " MiB; scene files are limited to 16 MiB");
+        // In bytes too: a file just over the limit read "16.0 MiB; ... limited to 16 MiB".
+        char text[96];
+        std::snprintf(text, sizeof text, "%ju bytes (%.2f MiB)", std::uintmax_t(bytes), double(bytes) / (1024.0 * 1024.0));
+        return InvalidInput(path + ": the file is " + text + "; scene files are limited to 16 MiB (" +
+                            std::to_string(scene_file_max_bytes) + " bytes)");
     };
     if (std::uintmax_t(st.st_size) > std::uintmax_t(scene_file_max_bytes)) throw too_big(std::uintmax_t(st.st_size));
 
