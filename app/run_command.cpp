@@ -206,13 +206,7 @@ int run_command(const RunOptions& o) {
                                "outline cloths of the fabric model have them); drop " + flag);
     // FAS at rest never acts where its measured faults are (implicit_step.cpp, fas_at_rest): say so, not accept it.
     if (o.fas_at_rest) {
-        const SimulationParams& p = sim.params();
-        const char* why = !p.colliders.empty()                ? "colliders"
-                          : p.self_collision.thickness > 0.0f ? "self-collision"
-                          : p.wind.enabled                    ? "wind"
-                          : p.aero.enabled                    ? "aerodynamic wind"
-                                                              : nullptr;
-        if (why)
+        if (const char* why = fas_at_rest_excluded_by(sim.params()))
             throw InvalidInput(std::string("--fas-at-rest: FAS at rest never acts with colliders, self-collision, "
                                            "wind or aerodynamic wind (docs/implicit.md, \"FAS at rest\"), and this "
                                            "scene has ") + why + "; drop --fas-at-rest");
@@ -254,8 +248,6 @@ int run_command(const RunOptions& o) {
     progress.clear();
     const double wall = std::chrono::duration<double>(clock_type::now() - start).count();
     const Health health = workers.run([&] { return sim.health(); });
-    // The monitor has figures once it has checked (every HealthMonitor::check_every substeps, or a rebaseline).
-    const bool monitor_checked = health.monitor.energy_bound > 0.0 || health.monitor.substep > 0;
     const std::uint64_t done = sim.steps_done();
     const double rate = wall > 0.0 ? double(particles) * double(done) / wall : 0.0;
     const double real_time = wall > 0.0 ? sim.time() / wall : 0.0; // simulated seconds per wall second
@@ -334,7 +326,7 @@ int run_command(const RunOptions& o) {
     j["finite"] = health.finite && error.empty();
     j["healthy"] = health.finite && error.empty() && blow_up.empty();
     if (!blow_up.empty()) j["health_error"] = blow_up;
-    j["health"] = {{"checked", monitor_checked},
+    j["health"] = {{"checked", health.monitor.checked},
                    {"substep", health.monitor.substep},
                    {"kinetic_energy", health.monitor.kinetic_energy},
                    {"energy_bound", health.monitor.energy_bound},
@@ -391,7 +383,7 @@ int run_command(const RunOptions& o) {
         std::printf("  max structural strain %.4f, kinetic energy %.4g J, finite %s, checksum %s\n",
                     double(health.max_structural_strain), health.kinetic_energy,
                     (health.finite && error.empty()) ? "yes" : "no", hex64(sim.checksum()).c_str());
-        if (monitor_checked)
+        if (health.monitor.checked)
             std::printf("  healthy %s (last check at substep %zu: kinetic energy %.4g J of %.4g, strain %.4g of %.4g, "
                         "speed %.4g of %.4g m/s)\n",
                         blow_up.empty() && error.empty() ? "yes" : "no", health.monitor.substep,

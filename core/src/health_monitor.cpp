@@ -245,6 +245,7 @@ std::string HealthMonitor::check(const Cloth& cloth, const SimulationParams& par
     const double speed_bound = speed_factor * v_ref;
 
     figures_.substep = step;
+    figures_.checked = true;
     figures_.kinetic_energy = r.ke;
     figures_.energy_bound = energy_bound;
     figures_.max_strain = r.max_strain;

@@ -211,13 +211,21 @@ void Simulation::cook_implicit() {
     implicit_ = std::move(solver);
 }
 
+const char* fas_at_rest_excluded_by(const SimulationParams& p) noexcept {
+    return !p.colliders.empty()                ? "colliders"
+           : p.self_collision.thickness > 0.0f ? "self-collision"
+           : p.wind.enabled                    ? "wind"
+           : p.aero.enabled                    ? "aerodynamic wind"
+                                               : nullptr;
+}
+
 /// ImplicitParams::fas_at_rest: whether this step's coarse levels solve with FAS because the cloth is at rest.
 template <bool Parallel> bool Simulation::fas_at_rest() {
     ImplicitSolver& is = *implicit_;
     const std::array<float, 3> g = gravity_now();
     const double gh = std::sqrt(double(g[0]) * g[0] + double(g[1]) * g[1] + double(g[2]) * g[2]) * params_.dt;
-    if (!params_.implicit.fas_at_rest || !params_.colliders.empty() || params_.self_collision.thickness > 0.0f ||
-        params_.wind.enabled || params_.aero.enabled || grabbed_ != SIZE_MAX || !(gh > 0.0)) {
+    if (!params_.implicit.fas_at_rest || fas_at_rest_excluded_by(params_) != nullptr || grabbed_ != SIZE_MAX ||
+        !(gh > 0.0)) {
         is.slow_steps = 0;
         return is.at_rest = false;
     }

@@ -20,21 +20,13 @@ namespace drape {
 // Without sewing a seam is at its rest length from the start. One that starts open (two panels placed apart) then
 // closes in a step or two, and its stretch energy flings the cloth: two canvas panels sewn across a 0.3 m gap reached
 // 3,960 m/s and a structural strain of 12.7 in 1 s, within the health monitor's bounds, which include the energy the
-// start holds. So a seam more than seam_snap_ratio times the cloth's mean edge longer than its rest length (its own
+// start holds. So a seam more than seam_snap_ratio times the cloth's spacing (cloth_spacing: its mean structural spring) longer than its rest length (its own
 // without sewing, also when sewing is switched off mid-run; a saved state's seam_rest with sewing) is refused, with
 // the remedy; so is a saved seam_rest that long beyond its seam (it would push the panels apart: 100 m was taken).
 void Simulation::refuse_seams_off_schedule(const float* x, const float* y, const float* z,
                                            std::span<const float> saved_rest) const {
     const SeamSet& s = cloth_.seams;
-    double edge_sum = 0.0;
-    std::size_t edges = 0;
-    for (const Edge& e : cloth_.edges)
-        if (e.kind != SpringKind::seam) {
-            edge_sum += e.rest;
-            ++edges;
-        }
-    if (edges == 0) return;
-    const double limit = double(SimulationParams::seam_snap_ratio) * edge_sum / double(edges);
+    const double limit = double(SimulationParams::seam_snap_ratio) * cloth_spacing(cloth_);
     double worst = 0.0;
     std::size_t at = 0;
     for (std::size_t k = 0; k < s.a.size(); ++k) {
@@ -54,12 +46,12 @@ void Simulation::refuse_seams_off_schedule(const float* x, const float* y, const
                       "a seam starts %.3g m open (particles %u and %u) and the sewing speed is 0, so it would snap shut "
                       "in one step and fling the cloth; set a sewing speed (physics.sewing_speed, allowed (0, 10] m/s; "
                       "the built-in T-shirt sews at 0.5) to draw the seams shut, or place the panels closer: without "
-                      "sewing a seam may start at most %.3g m open (%g x the cloth's mean edge)",
+                      "sewing a seam may start at most %.3g m open (%g x the cloth's spacing)",
                       worst, unsigned(s.a[at]), unsigned(s.b[at]), limit, double(SimulationParams::seam_snap_ratio));
     else
         std::snprintf(text, sizeof text,
                       "initial state seam_rest[%zu] = %.4g m is %.3g m %s than that seam (particles %u and %u), so it "
-                      "would %s; a saved seam's current rest length lies within %.3g m (%g x the cloth's mean edge) of "
+                      "would %s; a saved seam's current rest length lies within %.3g m (%g x the cloth's spacing) of "
                       "its length (state.seam_rest in scene files; leave it out to start sewing from the positions)",
                       at, double(saved_rest[at]), std::fabs(worst), worst > 0.0 ? "shorter" : "longer",
                       unsigned(s.a[at]), unsigned(s.b[at]),

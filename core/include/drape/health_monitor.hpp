@@ -47,6 +47,7 @@ struct StateBuffer;
 /// The monitor's last figures and bounds (for the CLI's JSON and the viewer).
 struct HealthFigures {
     std::size_t substep = 0;         ///< substep of the last check (0 = at construction / the last baseline)
+    bool checked = false;            ///< a check ran since the last baseline (else the bounds below are 0)
     double kinetic_energy = 0.0;     ///< J
     double energy_bound = 0.0;       ///< J
     float max_strain = 0.0f;         ///< largest (l - l0)/l0 over structural springs

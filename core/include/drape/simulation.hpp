@@ -121,9 +121,10 @@ struct SimulationParams {
     /// a seam 26 cm open snaps shut in one substep (its spring, or strain limiting, pulls the edges together at
     /// once), which flings the panels.
     float sewing_speed = 0.0f;
-    /// Without sewing, a seam may start at most this many of the cloth's mean edge lengths longer than its rest length
-    /// (Simulation refuses the cloth otherwise: it would snap shut and fling the panels).
-    static constexpr float seam_snap_ratio = 1.0f;
+    /// Without sewing, a seam may start at most this many times the cloth's spacing (cloth_spacing: its mean
+    /// structural spring) longer than its rest length (Simulation refuses the cloth otherwise: it would snap shut and
+    /// fling the panels; a saved seam_rest, too, lies within that of its seam's length).
+    static constexpr float seam_snap_ratio = 1.5f;
     /// Analytic colliders, positions relative to Cloth::origin; applied in order after strain limiting.
     std::vector<Collider> colliders;
     SelfCollision self_collision; ///< off by default (thickness 0)
@@ -505,5 +506,8 @@ class Simulation {
 
 /// Validates run parameters (ranges, not stability); throws InvalidInput.
 void validate_params(const SimulationParams& params);
+/// Why ImplicitParams::fas_at_rest can never act with these parameters (its measured faults: "colliders",
+/// "self-collision", "wind", "aerodynamic wind"), or nullptr. (A grab also stops it, for as long as it is held.)
+const char* fas_at_rest_excluded_by(const SimulationParams& params) noexcept;
 
 } // namespace drape
