@@ -246,6 +246,15 @@ int main(int argc, char** argv) {
     view_cmd->add_flag("--no-overlap", no_overlap,
                        "Simulate and draw one after the other (default: the next frame simulates on its own thread "
                        "while this one is drawn)");
+    bool no_interpolate = false;
+    view_cmd->add_flag("--no-interpolate", no_interpolate,
+                       "Every frame waits for its step (default: when a step takes longer than a frame, the frames "
+                       "in between blend the last two states, one step behind the simulation)");
+    view_cmd
+        ->add_option("--blend-fps", view.blend_fps,
+                     "Frames per second drawn while a step takes longer than a frame (the frames beside the step are "
+                     "paced to it, leaving the cores to the simulation)")
+        ->check(in_range<int>(10, 240, " frames/s"));
     view_cmd->add_option("--camera-yaw", view.camera_yaw_deg,
                          "Camera angle around the vertical, degrees: 0 looks from +z (a garment's front), 90 from +x, "
                          "180 from behind [default: the scene's view, front-right]")
@@ -303,6 +312,7 @@ int main(int argc, char** argv) {
         view.vsync = !no_vsync;
         view.ui = !no_ui;
         view.overlap = !no_overlap;
+        view.interpolate = !no_interpolate;
 #ifdef DRAPE_WITH_VIEWER
         return drape::app::view_command(view);
 #else

@@ -1,12 +1,16 @@
 // The viewer: a GLFW window with an OpenGL 4.5 core context, the frame loop, mouse and keyboard, and the Dear
-// ImGui panels (view_ui.cpp). One frame:
+// ImGui panels (view_ui.cpp). A frame that owns the session:
 //
-//   poll input -> ImGui frame -> queued buttons and keys (routed with this frame's capture flags) -> panels
-//   (changes apply now; rebuilds start on a background thread) -> install a finished build, or simulate
-//   `substeps` substeps (inside the session's Workers arena)
-//   -> wait for the next ring region's fence -> output stage writes positions + normals into it (oneTBB +
-//   SIMD)
+//   poll input -> end the step started last frame (finish_step) -> ImGui frame -> queued buttons and keys (routed
+//   with this frame's capture flags) -> panels (changes apply now; rebuilds start on a background thread) -> install
+//   a finished build -> wait for the next ring region's fence -> output stage writes positions + normals (oneTBB +
+//   SIMD) -> start the next step on its own thread (--no-overlap: simulate here, before the output stage)
 //   -> draw background, ground, cloth, markers, panels -> fence the region -> swap
+//
+// A step longer than a frame does not hold the frames (ViewOptions::interpolate): while it runs and no input waits
+// for the session, a frame draws the blend of the last two published states (FrameInterpolator) with the panels as
+// last built, paced to --blend-fps; if the step ends during such a frame, the frame takes it and starts the next
+// before its swap. The input callbacks move the camera at once and queue what touches the session.
 //
 // Timings of the three parts (sim, publish, draw; the fence wait counts as draw) feed the overlay and
 // --stats-json.
@@ -24,6 +28,7 @@
 #include "camera.hpp"
 #include "cloth_renderer.hpp"
 #include "collider_renderer.hpp"
+#include "frame_interpolation.hpp"
 #include "drape/picking.hpp"
 #include "stage.hpp"
 #include "view_command.hpp"
@@ -43,6 +48,9 @@ struct FrameTimes {
     double wait = 0.0;  ///< fence wait alone (part of draw)
     double swap = 0.0;  ///< glfwSwapBuffers alone (part of draw; llvmpipe rasterises and presents here)
     double frame = 0.0; ///< swap to swap
+    double sim_advanced = 0.0; ///< simulated seconds of the steps that ended in this frame (the real-time factor)
+    bool interpolated = false; ///< drawn while a step ran (FrameInterpolator): no panels, no input
+    bool took_step = false;    ///< a step ended and was taken in this frame (sim, sim_wait are its)
 };
 
 class Viewer {
@@ -66,6 +74,19 @@ class Viewer {
 
   private:
     void frame_input(double wall_dt);
+    /// The frame's simulation and publish (the session is this thread's: no step runs after its first lines until
+    /// the step it starts); returns whether the state is drawn.
+    bool session_frame(FrameTimes& t, bool last_frame);
+    /// Ends the running step (finish_step) and books it in t; whether it simulated anything.
+    bool take_step(FrameTimes& t);
+    /// In a frame drawn beside the step: when the step has ended, takes it, publishes it as the interpolator's newest
+    /// state and starts the next one (the panels and input wait for the next frame that owns the session).
+    void hand_over_step(FrameTimes& t);
+    /// Whether this frame may be drawn while the step runs (FrameInterpolator): interpolation on, a step running,
+    /// and nothing queued that touches the session.
+    bool may_draw_beside_step(bool last_frame) const;
+    /// Applies what the input callbacks queued while a step ran: a grab's cursor, dropped files.
+    void apply_deferred_input();
     /// Mouse buttons and keys queued by the callbacks, handled after ImGui::NewFrame(), when ImGui's capture flags
     /// describe the cursor and the focus of this frame (at callback time they are the previous frame's).
     void handle_input_events();
@@ -155,6 +176,13 @@ class Viewer {
     bool show_ground_ = true;
     bool full_mesh_ = false;
     bool step_running_ = false; ///< a step runs on its own thread while this frame is drawn (ViewOptions::overlap)
+    FrameInterpolator interpolator_;  ///< the states drawn while a step runs longer than a frame
+    std::uint64_t interpolator_generation_ = 0;
+    bool interpolate_ = false;        ///< ViewOptions::interpolate, with the overlap and without --demo-grab
+    bool grab_move_deferred_ = false; ///< the cursor moved a grab while a step ran: moved once it has ended
+    std::vector<std::string> dropped_; ///< .json files dropped while a step ran
+    std::uint64_t interpolated_frames_ = 0; ///< frames drawn while a step ran
+    double blend_draw_ms_ = 0.0; ///< running mean: from the end of the pacing wait to the swap, in those frames
     void note_session_error(); ///< a simulation error: the exit code, and once on stderr
     bool pixel_lighting_ = false; ///< light every pixel, whatever the triangles' size on screen
     bool gpu_full_mesh_ = false;
@@ -167,8 +195,12 @@ class Viewer {
     FrameTimes last_;
     FrameTimes shown_; ///< averaged over ~0.5 s for the overlay
     double shown_fps_ = 0.0;
+    double shown_real_time_ = 0.0; ///< simulated seconds per wall second over the overlay's window
+    bool window_steady_ = true;    ///< every frame of the window simulated (the slow-explicit hint's condition)
+    bool built_this_frame_ = false;
     FrameTimes window_sum_;
     int window_frames_ = 0;
+    int window_took_ = 0; ///< of them took a step
     std::chrono::steady_clock::time_point window_start_;
     std::vector<FrameTimes> samples_;
     std::size_t last_substeps_ = 0;

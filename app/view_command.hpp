@@ -32,6 +32,12 @@ struct ViewOptions {
     bool full_mesh = false;   ///< draw every triangle (no level of detail for fine grids)
     bool pixel_lighting = false; ///< light every pixel (default: per vertex where triangles are under 4 px)
     bool overlap = true; ///< simulate the next frame while this one is drawn (--no-overlap: one after the other)
+    /// With the overlap: a step longer than a frame does not hold the frame; frames in between blend the last two
+    /// states (FrameInterpolator; --no-interpolate: every frame waits for its step)
+    bool interpolate = true;
+    /// Frames per second drawn while a step spans frames: each drawn frame costs the simulation CPU (llvmpipe draws
+    /// on the same cores), so the frames beside a step are paced to this rate (--blend-fps)
+    int blend_fps = 30;
     std::optional<float> camera_yaw_deg; ///< camera around the vertical, degrees: 0 from +z (the front), 180 the back
     // Hidden automation hooks (documentation screenshots, tests).
     bool panels_open = false; ///< every panel section expanded

@@ -528,6 +528,7 @@ void ViewSession::run_step() {
         step_error_ = std::current_exception();
     }
     step_ms_ = 1e3 * seconds_since(start);
+    step_done_.store(true, std::memory_order_release);
 }
 
 std::size_t ViewSession::advance() {
@@ -542,6 +543,7 @@ bool ViewSession::start_step() {
     if (step_open_ || !step_due()) return false;
     step_before_ = sim_->steps_done();
     step_open_ = true;
+    step_done_.store(false, std::memory_order_relaxed);
     step_thread_ = std::thread([this] { run_step(); });
     return true;
 }
@@ -696,19 +698,18 @@ void ViewSession::note_published_strain(float max_structural_strain) {
     unconverged_warned_ = applies;
 }
 
-double ViewSession::note_frame_time(double frame_ms) {
+void ViewSession::note_real_time_factor(double factor) {
     // params_ (the session's copy), not the simulation's: a step may be running on its own thread.
-    const double factor = frame_ms > 0.0 ? double(substeps_) * double(params_.dt) / (frame_ms * 1e-3) : 0.0;
     // Substeps set by hand: the slow motion is the user's choice.
     if (!running_ || !auto_substeps_ || params_.solver == Solver::implicit || !(factor > 0.0) ||
         factor >= slow_explicit_factor)
-        return factor;
+        return;
     const std::pair<std::uint64_t, std::size_t> cloth{scene_generation_, sim_ ? sim_->cloth().particle_count : 0};
-    if (slow_hinted_for_ == cloth) return factor;
+    if (slow_hinted_for_ == cloth) return;
     // A warning or error still fresh on the message line is not replaced by a hint.
     if (message_.level != MessageLevel::info &&
         std::chrono::steady_clock::now() - message_.when < std::chrono::seconds(10))
-        return factor;
+        return;
     slow_hinted_for_ = cloth;
     char text[400];
     std::snprintf(text, sizeof text,
@@ -718,7 +719,6 @@ double ViewSession::note_frame_time(double frame_ms) {
                   "damps the swing more (docs/implicit.md)",
                   factor, slow_explicit_factor, double(params_.dt));
     post(MessageLevel::info, text);
-    return factor;
 }
 
 std::shared_ptr<const ViewSession::KeepState> ViewSession::capture_state() {

@@ -170,10 +170,13 @@ class ViewSession {
     /// polls and decides on the caller's thread, then runs the step on a thread of its own and returns whether it
     /// started one; finish_step() waits for it and does what advance() does after the step (errors, the iteration
     /// budget), returning the substeps run (0 when none was started). Between the two nothing else may touch the
-    /// simulation, and of the session only note_frame_time (which reads the session's own fields); the viewer only
+    /// simulation, and of the session only note_real_time_factor and step_ready (which read the session's own fields); the viewer only
     /// draws what it published before. The same bits as advance().
     bool start_step();
     std::size_t finish_step();
+    /// Whether finish_step() would return at once: no step open, or the open one has ended. Safe while it runs (the
+    /// viewer keeps drawing until it has ended: FrameInterpolator).
+    bool step_ready() const noexcept { return !step_open_ || step_done_.load(std::memory_order_acquire); }
     /// Wall milliseconds of the last step (advance() or start_step()), measured on its own thread.
     double last_step_ms() const noexcept { return step_ms_; }
     /// Writes the current positions and normals into `out` (Publisher::publish) inside the workers.
@@ -335,11 +338,10 @@ class ViewSession {
     /// After a publish (the step joined, none running): posts unconverged_implicit_warning (materials.hpp) for the
     /// published strain once each time it starts to apply.
     void note_published_strain(float max_structural_strain);
-    /// The overlay's mean frame time over ~0.5 s (ms), safe while a step runs. When the real-time factor it gives
-    /// (simulated seconds per wall second) is below slow_explicit_factor with the explicit solver, posts once per cloth
-    /// that the implicit solver steps a frame at a time (a 100 x 100 hang ran at 0.27x real time in the viewer with
-    /// the explicit solver). Returns the factor.
-    double note_frame_time(double frame_ms);
+    /// The overlay's real-time factor (simulated seconds per wall second over ~0.5 s), safe while a step runs. Below
+    /// slow_explicit_factor with the explicit solver, posts once per cloth that the implicit solver steps a frame at a
+    /// time (a 100 x 100 hang ran at 0.27x real time in the viewer with the explicit solver).
+    void note_real_time_factor(double factor);
     static constexpr double slow_explicit_factor = 0.5;
     /// Non-empty after the simulation stopped on a non-finite value or an explosion (until reset()).
     const std::string& error() const noexcept { return error_; }
@@ -482,6 +484,7 @@ class ViewSession {
     // The step start_step() began: its thread, the steps done before it, its wall time and its exception.
     std::thread step_thread_;
     bool step_open_ = false;
+    std::atomic<bool> step_done_{false}; ///< set by the step's thread as its last act
     std::size_t step_before_ = 0;
     double step_ms_ = 0.0;
     std::exception_ptr step_error_;

@@ -484,6 +484,8 @@ void Viewer::ui_overlay() {
     const bool implicit = sim.params().solver == Solver::implicit;
     ImGui::Text("%s/frame %d   dt %.3g s", implicit ? "implicit steps" : "substeps", s.substeps(),
                 double(sim.params().dt));
+    if (interpolator_.frames_per_step() > 1.05)
+        ImGui::Text("a step spans %.1f frames (drawn blended)", interpolator_.frames_per_step());
     if (implicit)
         ImGui::Text("iterations %u%s   residual %.2e", sim.implicit_stats().iterations,
                     s.iteration_budget() && s.iterations() < s.max_iterations() ? " (budget)" : "",
@@ -492,10 +494,8 @@ void Viewer::ui_overlay() {
                 grouped(sim.cloth().spring_count()).c_str());
     ImGui::Text("threads %d   max strain %.2f %%", s.threads(),
                 100.0 * double(last_publish_.max_structural_strain));
-    const double realtime =
-        shown_.frame > 0.0 ? double(s.substeps()) * sim.params().dt / (shown_.frame * 1e-3) : 0.0;
     if (s.running())
-        ImGui::TextColored(ImVec4(0.55f, 0.9f, 0.55f, 1.0f), "running   %.2fx real time", realtime);
+        ImGui::TextColored(ImVec4(0.55f, 0.9f, 0.55f, 1.0f), "running   %.2fx real time", shown_real_time_);
     else
         ImGui::TextColored(ImVec4(1.0f, 0.8f, 0.3f, 1.0f), "paused (Space runs, N steps)");
     ImGui::TextDisabled("F1 help");

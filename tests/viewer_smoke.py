@@ -383,6 +383,48 @@ def main():
     print(f"ok: implicit viewer: {stats['fps']:.1f} FPS, {stats['real_time_factor']:.2f}x real time, "
           f"{im['iterations']} iterations, residual {im['relative_residual']:.3g}")
 
+    # Steps longer than a frame (a 400 x 400 implicit hang in a small window): the frames between steps are drawn
+    # blended (FrameInterpolator) without touching the simulation, so the run takes fewer steps than frames, and the
+    # state it reaches is bit for bit the state of a run that waits for every step (--no-interpolate) after as many
+    # steps. The iteration count is fixed (10 is the budget's floor), so the steps do not depend on wall time.
+    tmp = tempfile.mkdtemp(prefix="drape_blend_")
+    base = [xvfb, "-s", "-screen 0 1600x1000x24", args.drape, "view", "--scene", "hang", "--size", "400",
+            "--solver", "implicit", "--dt", "0.033333", "--iterations", "10", "--width", "640", "--height", "400",
+            "--no-vsync", "--stats-json", "--blend-fps", "240"]
+    runs = {}
+    for name, extra in (("blend", ["--frames", "40"]), ("wait", ["--no-interpolate"])):
+        if name == "wait":
+            extra = extra + ["--frames", str(runs["blend"]["sim_steps"])]
+        cmd = base + extra + ["--save-scene", os.path.join(tmp, name + ".json")]
+        print("running:", " ".join(cmd))
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600, env=env)
+        lines = [l for l in proc.stdout.splitlines() if l.strip()]
+        if proc.returncode != 0 or len(lines) != 1:
+            sys.stderr.write(proc.stderr)
+            print(f"FAIL: the {name} run exited with {proc.returncode}, stdout {proc.stdout!r}")
+            return 1
+        runs[name] = json.loads(lines[0])
+    blend, wait = runs["blend"], runs["wait"]
+    if not (blend["interpolate"] and blend["interpolated_frames"] > 0 and blend["frames_per_step"] > 1.0 and
+            blend["sim_steps"] < blend["frames"] and blend["finite"] and blend["real_time_factor"] > 0):
+        print(f"FAIL: no frame was drawn beside a step: {blend}")
+        return 1
+    if not (wait["interpolate"] is False and wait["interpolated_frames"] == 0 and
+            wait["sim_steps"] == wait["frames"] == blend["sim_steps"] and wait["finite"]):
+        print(f"FAIL: --no-interpolate did not step every frame: {wait}")
+        return 1
+    states = []
+    for name in ("blend", "wait"):
+        with open(os.path.join(tmp, name + ".json")) as f:
+            states.append(json.load(f)["state"]["positions"])
+    if states[0] != states[1]:
+        print("FAIL: drawing frames beside the steps changed the simulation")
+        return 1
+    print(f"ok: steps longer than a frame: {blend['frames']} frames, {blend['interpolated_frames']} drawn blended, "
+          f"{blend['sim_steps']} steps ({blend['frames_per_step']:.2f} frames a step), the same state as "
+          f"{wait['frames']} frames that waited for each step")
+    shutil.rmtree(tmp, ignore_errors=True)
+
     # Lighting per vertex where the drawn triangles are under 4 pixels (ClothRenderer::draw_cloth): the 200 x 200 hang
     # in a 640 x 400 window is, and looks as it does lit per pixel. One run folds the cloth (a grab) and saves its
     # state; the same state is then drawn paused both ways.
