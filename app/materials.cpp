@@ -2,6 +2,7 @@
 #include "materials.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <limits>
@@ -270,4 +271,39 @@ std::string unconverged_implicit_warning(const Simulation& sim, float max_struct
            fix;
 }
 
+std::string long_explicit_run_warning(const StabilityBound& bound, double dt, std::uint64_t substeps,
+                                      std::size_t particles) {
+    const double work = double(substeps) * double(particles);
+    if (!(work > long_explicit_run_work)) return {};
+    // At the bound w^2 dt^2 + 2 g dt = 4 (stability.cpp): the damping's share of it, 2 g dt / 4, says which sets it.
+    const double damping_share = 0.5 * bound.gamma_max * bound.dt_max;
+    char cause[400];
+    if (damping_share > 0.5)
+        std::snprintf(cause, sizeof cause,
+                      "the damping sets that bound (damping rates up to %.3g 1/s; the stiffness alone would allow %.3g "
+                      "s): a smaller material.damping (the fabric model's Rayleigh beta, s) or damping_ratio (the "
+                      "springs model) allows longer substeps",
+                      bound.gamma_max, bound.omega2_max > 0.0 ? 2.0 / std::sqrt(bound.omega2_max) : 0.1);
+    else
+        std::snprintf(cause, sizeof cause,
+                      "the stiffest spring (%.4g N/m) on the lightest particle (%.3g g) sets that bound, and it "
+                      "shrinks as the cloth gets finer",
+                      bound.max_stiffness, 1e3 * bound.min_mass);
+    const double minutes = work / 5e8 / 60.0;
+    char duration[64];
+    if (minutes < 90.0)
+        std::snprintf(duration, sizeof duration, "%.0f minute%s", std::max(1.0, std::round(minutes)),
+                      minutes < 1.5 ? "" : "s");
+    else
+        std::snprintf(duration, sizeof duration, "%.3g hours", minutes / 60.0);
+    char text[900];
+    std::snprintf(text, sizeof text,
+                  "this run takes %.4g substeps of %.3g s (under the explicit stability bound, %.3g s) for %zu "
+                  "particles: %.3g particle-substeps, about %s at 5e8 a second (2 cores); %s. The implicit solver "
+                  "(--solver implicit) takes steps of up to 0.1 s at any stiffness and damping",
+                  double(substeps), dt, bound.dt_max, particles, work, duration, cause);
+    return text;
+}
+
 } // namespace drape::app
+

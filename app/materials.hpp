@@ -12,6 +12,7 @@
 #include "drape/cloth.hpp"
 #include "drape/scene.hpp"
 #include "drape/simulation.hpp"
+#include "drape/stability.hpp"
 
 namespace drape::app {
 
@@ -78,6 +79,14 @@ inline constexpr float unconverged_strain = 0.3f;
 /// A warning when movable particles of the simulation's present state are inside a collider, deeper than half its
 /// thickness (the explicit collide stage holds them at rest there), else empty.
 std::string started_inside_warning(const Simulation& sim);
+/// A warning for an explicit run of more than long_explicit_run_work particle-substeps (about a minute at the
+/// ~5e8 particle-substeps a second of 2 cores, docs/performance.md): how many substeps, what sets the stability bound
+/// (the damping, or the stiffest spring on the lightest particle) and that the implicit solver takes steps of up to
+/// 0.1 s. Empty below it. (A sweep found silk with damping 0.1 s asking 39 million substeps of 2.5e-8 s for 1 s of a
+/// 32 x 32 cloth, silently.)
+std::string long_explicit_run_warning(const StabilityBound& bound, double dt, std::uint64_t substeps,
+                                      std::size_t particles);
+inline constexpr double long_explicit_run_work = 3e10;
 /// A warning (or empty) when self-collision's thickness is above half the cloth's mean spring length: every particle
 /// then lies within the thickness of its neighbours' triangles, which makes the stage slow (the 64 x 64 pile at 0.05 m:
 /// ~1 s a substep, 935,447 contacts) and can push the cloth apart (the health monitor names it if so).

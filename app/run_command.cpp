@@ -211,8 +211,10 @@ int run_command(const RunOptions& o) {
                                            "wind or aerodynamic wind (docs/implicit.md, \"FAS at rest\"), and this "
                                            "scene has ") + why + "; drop --fas-at-rest");
     }
+    const std::string long_run =
+        implicit ? std::string() : long_explicit_run_warning(bound, double(sp.dt), steps, sim.cloth().particle_count);
     for (const std::string& w : {single_level_implicit_warning(sim), self_collision_thickness_warning(sim),
-                                 started_inside_warning(sim)})
+                                 started_inside_warning(sim), long_run})
         if (!w.empty()) std::cerr << "drape run: warning: " << w << "\n";
     const std::size_t particles = sim.cloth().particle_count;
     std::unique_ptr<ObjExporter> exporter;

@@ -476,6 +476,39 @@ python3 -c "import json,sys; j=json.load(open('$out')); m=j['material']; assert 
 "$DRAPE" materials --json >"$out" 2>"$err" || fail=1
 python3 -c "import json; l=json.load(open('$out')); assert len(l) >= 6 and all(p['source'] for p in l), l; print('ok: drape materials ->', [p['name'] for p in l])" || fail=1
 
+# An explicit run of more than ~a minute says so before it starts, with what sets the stability bound and the implicit
+# solver as the way out (a sweep found silk at damping 0.1 s asking 39 million substeps for 1 s, silently). The run is
+# stopped once the warning is there.
+long_run_warned() { # long_run_warned "must appear" args...
+    local want=$1
+    shift
+    "$DRAPE" "$@" >"$out" 2>"$err" &
+    local pid=$! i
+    for i in $(seq 1 1200); do
+        grep -qF "this run takes" "$err" && break
+        kill -0 "$pid" 2>/dev/null || break
+        sleep 0.1
+    done
+    kill "$pid" 2>/dev/null
+    wait "$pid" 2>/dev/null
+    if grep -qF "drape run: warning: this run takes" "$err" && grep -qF -- "$want" "$err" &&
+        grep -qF "The implicit solver (--solver implicit) takes steps of up to 0.1 s" "$err"; then
+        echo "ok: drape $* -> $(head -1 "$err")"
+    else
+        echo "FAIL: drape $* -> expected the long-run warning with '$want':"
+        cat "$err"
+        fail=1
+    fi
+}
+cat >"$tmpdir/silk_damped.json" <<'JSON'
+{"cloth": {"type": "grid", "n": 32, "size": 1.0}, "material": {"fabric": "silk", "damping": 0.1}}
+JSON
+long_run_warned "the damping sets that bound" run --scene "$tmpdir/silk_damped.json" --sim-seconds 1
+long_run_warned "the stiffest spring" run --scene hang --size 600 --sim-seconds 10
+"$DRAPE" run --scene "$tmpdir/silk_damped.json" --steps 100 >"$out" 2>"$err" && ! grep -q "this run takes" "$err" &&
+    echo "ok: a short run of the same cloth has no long-run warning" ||
+    { echo "FAIL: short run warned or failed"; cat "$err"; fail=1; }
+
 # Implicit steps far from converged that leave the cloth strained get a warning naming the residual and what to change
 # (a flag at 2 sweeps per 0.1 s step ends 720 % stretched), and --json says so; the scene's own implicit run does not.
 expect_warning() { # expect_warning "must appear" "must not appear" args...: exit 0, one warning line
