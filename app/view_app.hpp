@@ -183,6 +183,9 @@ class Viewer {
     std::vector<std::string> dropped_; ///< .json files dropped while a step ran
     std::uint64_t interpolated_frames_ = 0; ///< frames drawn while a step ran
     double blend_draw_ms_ = 0.0; ///< running mean: from the end of the pacing wait to the swap, in those frames
+    double step_ms_mean_ = 0.0;  ///< running mean of the steps' wall time
+    std::chrono::steady_clock::time_point step_started_; ///< of the running step
+    void start_step(); ///< session_->start_step(), noting when
     void note_session_error(); ///< a simulation error: the exit code, and once on stderr
     bool pixel_lighting_ = false; ///< light every pixel, whatever the triangles' size on screen
     bool gpu_full_mesh_ = false;

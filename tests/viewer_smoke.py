@@ -383,6 +383,22 @@ def main():
     print(f"ok: implicit viewer: {stats['fps']:.1f} FPS, {stats['real_time_factor']:.2f}x real time, "
           f"{im['iterations']} iterations, residual {im['relative_residual']:.3g}")
 
+    # A run the health monitor stops (the flag at 2 sweeps per 0.1 s step stretches until it explodes at ~2.4 s): exit
+    # code 4, the reason on stderr, and the stats say the kept state is finite but the run is not healthy, and why.
+    cmd = [xvfb, "-s", "-screen 0 1600x1000x24", args.drape, "view", "--scene", "flag", "--solver", "implicit",
+           "--iterations", "2", "--dt", "0.1", "--frames", "60", "--width", "640", "--height", "400", "--no-vsync",
+           "--stats-json"]
+    print("running:", " ".join(cmd))
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
+    lines = [l for l in proc.stdout.splitlines() if l.strip()]
+    stats = json.loads(lines[0]) if len(lines) == 1 else {}
+    if not (proc.returncode == 4 and "the cloth exploded: blow-up" in proc.stderr and stats.get("finite") is True and
+            stats.get("healthy") is False and stats.get("error", "").startswith("blow-up at substep")):
+        sys.stderr.write(proc.stderr)
+        print(f"FAIL: a stopped run: exit {proc.returncode}, stats {stats}")
+        return 1
+    print(f"ok: a run the health monitor stopped: exit 4, finite state kept, error '{stats['error'][:60]}...'")
+
     # Steps longer than a frame (a 400 x 400 implicit hang in a small window): the frames between steps are drawn
     # blended (FrameInterpolator) without touching the simulation, so the run takes fewer steps than frames, and the
     # state it reaches is bit for bit the state of a run that waits for every step (--no-interpolate) after as many
