@@ -902,10 +902,9 @@ void Viewer::print_stats_json() const {
     j["max_strain"] = last_publish_.max_structural_strain;
     j["strain_limit"] = s.params().strain_limit.ratio; // 0 = off
     // The state kept and drawn: a stopped run keeps its last finite state (finite stays true); healthy says whether
-    // the simulation stopped, and error why (the exit code too: 3 non-finite, 4 exploded).
+    // the simulation stopped, and error (below, only then) why; the exit code too: 3 non-finite, 4 exploded.
     j["finite"] = last_publish_.finite;
     j["healthy"] = last_publish_.finite && session_->error().empty();
-    j["error"] = session_->error();
     j["camera"] = {{"yaw", camera_.yaw}, {"pitch", camera_.pitch}, {"distance", camera_.distance}};
     j["stiffness"] = session_->fabric().stiffness;
     j["markers"] = session_->show_markers();
