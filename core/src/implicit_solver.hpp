@@ -25,6 +25,11 @@ struct CoarseLevel {
     std::vector<float> inv_mass;      ///< this step's: 0 where the nearest particle of the cloth is fixed
     std::vector<float> free_inv_mass; ///< the level's own masses
     std::vector<std::uint32_t> nearest; ///< per node: the nearest particle of the cloth (pins, grabs)
+    /// Per node of the next finer level (the cloth's particles for the first): this level's node nearest to it, so a
+    /// fixed particle holds the node that stands for it on every level (held), not only a node whose nearest
+    /// particle it happens to be.
+    std::vector<std::uint32_t> up;
+    std::vector<std::uint8_t> held; ///< this step's: the node stands for a fixed particle of the cloth
     std::vector<float> rx, ry, rz;    ///< the cloth's force residual at x^n restricted onto this level (N)
     std::vector<float> tx, ty, tz;    ///< scratch: this level's own residual at x^n
     std::vector<float> rest0, rest;   ///< per Cloth::edges entry: the natural rest length and this step's
