@@ -16,6 +16,24 @@ void publish(std::span<float> state, float value) {
     for (float& f : state) f = value;
 }
 
+// An interpolator of `floats` floats that has drawn a state of zeros into out.
+FrameInterpolator started(std::size_t floats, std::vector<float>& out) {
+    FrameInterpolator f;
+    f.resize(floats);
+    out.assign(floats, -1.0f);
+    publish(f.snap(), 0.0f);
+    f.write(out);
+    return f;
+}
+
+// Steps first..last (state k is k), each followed by `frames` drawn frames.
+void run_steps(FrameInterpolator& f, std::vector<float>& out, int first, int last, int frames) {
+    for (int step = first; step <= last; ++step) {
+        publish(f.arrival(), float(step));
+        for (int k = 0; k < frames; ++k) f.write(out);
+    }
+}
+
 } // namespace
 
 // Steps that end every frame: each frame draws the newest state exactly, as without interpolation.
@@ -36,16 +54,12 @@ TEST(FrameInterpolator, StepsEveryFrameDrawTheNewestStateAsItIs) {
 // Steps that end every third frame: the running mean of frames per step goes to 3, the frames in between climb a
 // third of the way each, and the drawn value never jumps back or by more than one step's change.
 TEST(FrameInterpolator, StepsOverSeveralFramesAreDrawnBlendedWithoutJumps) {
-    FrameInterpolator f;
-    f.resize(21);
-    std::vector<float> out(21);
-    publish(f.snap(), 0.0f);
-    f.write(out);
+    std::vector<float> out;
+    FrameInterpolator f = started(21, out);
     float last = 0.0f;
-    int frames = 0;
     for (int step = 1; step <= 40; ++step) {
         publish(f.arrival(), float(step)); // state k is k: the exact motion is one unit a step
-        for (int k = 0; k < 3; ++k, ++frames) {
+        for (int k = 0; k < 3; ++k) {
             const float alpha = f.write(out);
             for (float v : out) ASSERT_EQ(v, out[0]);
             EXPECT_GE(out[0], last) << "drawn backwards at step " << step;
@@ -71,15 +85,9 @@ TEST(FrameInterpolator, StepsOverSeveralFramesAreDrawnBlendedWithoutJumps) {
 
 // A step arriving before the blend reached its end starts from what was drawn, not from the older state.
 TEST(FrameInterpolator, AnEarlyStepBlendsOnFromWhatWasDrawn) {
-    FrameInterpolator f;
-    f.resize(5);
-    std::vector<float> out(5);
-    publish(f.snap(), 0.0f);
-    f.write(out);
-    for (int step = 1; step <= 30; ++step) { // F -> 4
-        publish(f.arrival(), float(step));
-        for (int k = 0; k < 4; ++k) f.write(out);
-    }
+    std::vector<float> out;
+    FrameInterpolator f = started(5, out);
+    run_steps(f, out, 1, 30, 4); // F -> 4
     ASSERT_EQ(out[0], 30.0f);
     publish(f.arrival(), 31.0f);
     f.write(out); // a quarter of the way: 30.25
@@ -92,16 +100,9 @@ TEST(FrameInterpolator, AnEarlyStepBlendsOnFromWhatWasDrawn) {
 
 // A snap (paused, reset, a new cloth) draws the state as it is at once and restarts the count.
 TEST(FrameInterpolator, SnapDrawsAtOnceAndWrongSizesAreRefused) {
-    FrameInterpolator f;
-    f.resize(8);
-    std::vector<float> out(8);
-    publish(f.snap(), 0.0f);
-    f.write(out);
-    for (int step = 1; step <= 10; ++step) {
-        publish(f.arrival(), float(step));
-        f.write(out);
-        f.write(out);
-    }
+    std::vector<float> out;
+    FrameInterpolator f = started(8, out);
+    run_steps(f, out, 1, 10, 2);
     publish(f.snap(), -7.0f);
     EXPECT_EQ(f.write(out), 1.0f);
     EXPECT_EQ(out[3], -7.0f);

@@ -24,6 +24,7 @@ Exit 0 on success, 1 with a message naming the failed check.
 Usage: viewer_smoke.py --drape build/release/drape [--keep DIR]
 """
 import argparse
+import contextlib
 import json
 import os
 import shutil
@@ -91,6 +92,35 @@ def luminance(r, g, b):
     return 0.2126 * r + 0.7152 * g + 0.0722 * b
 
 
+@contextlib.contextmanager
+def viewer_process(cmd):
+    """The viewer as a child process (stdout and stderr piped), killed on the way out if it still runs."""
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        yield proc
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+
+
+def quit_driven_viewer(proc, wid, what):
+    """Ctrl+Q to a viewer started with --stats-json: its stats, or None (said why) when it did not quit within 60 s
+    or exited with an error."""
+    subprocess.run(["xdotool", "key", "--window", wid, "ctrl+q"], check=True, timeout=30)
+    try:
+        out, err = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        out, err = proc.communicate()
+        print(f"FAIL: {what} did not quit on Ctrl+Q within 60 s; stderr: {err[-2000:]}")
+        return None
+    if proc.returncode != 0:
+        print(f"FAIL: {what} exited with {proc.returncode}: {err[-2000:]}")
+        return None
+    return json.loads([l for l in out.splitlines() if l.strip()][-1])
+
+
 def drive_input(drape):
     """Runs inside scripts/with_xvfb.sh (DISPLAY set): the viewer, driven by xdotool. Returns 0 or 1."""
     def xdo(*args):
@@ -100,10 +130,8 @@ def drive_input(drape):
     # "model" row, then node mass, then the stiffness rows): the rows' centres, window pixels.
     structural_k = (100, 285)
     shear_k = (100, 308)
-    proc = subprocess.Popen([drape, "view", "--material", "springs", "--substeps", "900", "--stats-json",
-                             "--no-vsync"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
+    with viewer_process([drape, "view", "--material", "springs", "--substeps", "900", "--stats-json",
+                         "--no-vsync"]) as proc:
         wid = subprocess.run(["xdotool", "search", "--sync", "--onlyvisible", "--name", "drape - cloth viewer"],
                              capture_output=True, text=True, timeout=60).stdout.split()[0]
         # Let it draw its first frames (shaders compile, the panels are laid out) on a busy machine.
@@ -147,22 +175,9 @@ def drive_input(drape):
         time.sleep(0.8)
         xdo("key", "BackSpace")
         time.sleep(1.5)
-        xdo("key", "--window", wid, "ctrl+q")
-        try:
-            out, err = proc.communicate(timeout=60)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            out, err = proc.communicate()
-            print(f"FAIL: the viewer did not quit on Ctrl+Q within 60 s; stderr: {err[-2000:]}")
-            return 1
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.communicate()
-    if proc.returncode != 0:
-        print(f"FAIL: the driven viewer exited with {proc.returncode}: {err}")
+        stats = quit_driven_viewer(proc, wid, "the driven viewer")
+    if stats is None:
         return 1
-    stats = json.loads([l for l in out.splitlines() if l.strip()][-1])
     print(f"driven viewer: camera {stats['camera']}, stiffness {stats['stiffness']}, generation {stats['generation']}, "
           f"undo depth {stats['undo_depth']}")
     ok = True
@@ -209,9 +224,7 @@ def drive_blended_grab(drape):
     cx = sorted(x for x, _ in hits)[len(hits) // 2]
     cy = sorted(y for _, y in hits)[len(hits) // 2]
     saved = os.path.join(tmp, "after.json")
-    proc = subprocess.Popen(base + ["--paused", "--stats-json", "--save-scene", saved], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    try:
+    with viewer_process(base + ["--paused", "--stats-json", "--save-scene", saved]) as proc:
         wid = subprocess.run(["xdotool", "search", "--sync", "--onlyvisible", "--name", "drape - cloth viewer"],
                              capture_output=True, text=True, timeout=60).stdout.split()[0]
         time.sleep(4.0)
@@ -239,16 +252,9 @@ def drive_blended_grab(drape):
             time.sleep(0.05)
         xdo("mouseup", "1")
         time.sleep(2.0)
-        xdo("key", "--window", wid, "ctrl+q")
-        out, err = proc.communicate(timeout=120)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.communicate()
-    if proc.returncode != 0:
-        print(f"FAIL: the driven blended viewer exited with {proc.returncode}: {err[-2000:]}")
+        stats = quit_driven_viewer(proc, wid, "the driven blended viewer")
+    if stats is None:
         return 1
-    stats = json.loads([l for l in out.splitlines() if l.strip()][-1])
     with open(saved) as f:
         state = json.load(f)["state"]
     pinned = state["pinned"]
