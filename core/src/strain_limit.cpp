@@ -183,10 +183,12 @@ void Simulation::update_limit_levels() noexcept {
 template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, bool with_collide) {
     const StrainLimit& sl = params_.strain_limit;
     if (sl.ratio <= 0.0f || limit_a_.empty() || (steps_done_ + 1) % sl.every != 0) return false;
-    // The implicit solver's form (one-sided, no shear, positions only: above) except while a grab is held, when the
-    // explicit solver's form runs (a drag out of the cloth's reach: the one-sided form put its whole excess into the
-    // spring next to the grab; the mass-weighted form without shear springs and velocities let the stretch creep up
-    // over 20 steps of the NoAllocation grab at N = 48; the full explicit form holds there, as it always did).
+    // The implicit solver's form (one-sided, no shear, positions only: above), a grab held or not. Until 2026-11-30 a
+    // grab switched to the explicit solver's form (a drag out of the cloth's reach had put the whole excess into the
+    // spring next to the grab, before the levels by structural springs and both ends moving after 50 sweeps); that
+    // form's shear corrections squeezed the cloth around a grab held in place (|strain| 0.31 at N = 100, 0.41 at
+    // N = 300 with the limit at 0.1, and a 300 x 300 hang grabbed in the viewer blew up) where this form holds 0.100
+    // (docs/implicit.md, "A held particle in the middle").
     const bool frame_form = strain_limit_frame_form();
     strain_limit::Args c{out.x.data(),
                          out.y.data(),

@@ -350,10 +350,10 @@ class Simulation {
     std::vector<std::uint64_t> limit_group_moved_;
     std::uint64_t limit_seq_ = 0;
     std::vector<std::uint32_t> limit_a_, limit_b_;
-    /// The strain limit's form for frame-long steps (implicit solver, no grab held; strain_limit.cpp) and the springs
+    /// The strain limit's form for frame-long steps (the implicit solver, a grab held or not; strain_limit.cpp) and the springs
     /// it acts on: structural and seam springs always, shear springs only in the explicit solver's form. The limit
     /// and the health figures (max_limited_stretch) both ask here.
-    bool strain_limit_frame_form() const noexcept { return params_.solver == Solver::implicit && grabbed_ == SIZE_MAX; }
+    bool strain_limit_frame_form() const noexcept { return params_.solver == Solver::implicit; }
     bool strain_limited(SpringKind kind) const noexcept {
         return kind != SpringKind::bend && (kind != SpringKind::shear || !strain_limit_frame_form());
     }
