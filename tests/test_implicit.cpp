@@ -653,6 +653,31 @@ TEST(Implicit, StrainLimitHoldsAroundAGrab) {
     EXPECT_EQ(sim.grabbed(), mid);
 }
 
+// A drag out of the cloth's reach with the strain limit on: the limit cannot hold it, and the monitor's cap for a
+// limited cloth (strain 1) used to stop the run (the 48 x 48 hang's centre moved 0.6 m up: after 6 steps; a sudden
+// 10 cm grab of a 300 x 300 one: after 2). Once the user has dragged, the monitor bounds the strain by the energy
+// available, the drag's work included, as without a limit; released, the limit pulls the cloth back.
+TEST(Implicit, StrainLimitedClothDraggedOutOfReachRecovers) {
+    const std::uint32_t n = 48;
+    SceneBuild scene = build_hang_scene(fabric_hang(n));
+    SimulationParams p = implicit_params(1.0f / 30.0f, 10);
+    p.strain_limit.ratio = 0.1f;
+    Simulation sim(std::move(scene.cloth), scene.initial, p);
+    sim.step(5);
+    sim.grab(n * n / 2, {0.0f, 0.1f, 0.0f}); // a sudden 10 cm grab of the centre
+    float dragged = 0.0f, released = 0.0f;
+    for (int k = 0; k < 80; ++k) {
+        if (k == 20) sim.move_grab({0.0f, 0.6f, 0.0f}); // farther than the cloth reaches from its clips
+        if (k == 40) sim.release_grab();
+        ASSERT_NO_THROW(sim.step(1)) << "step " << k;
+        const float strain = sim.health().max_structural_strain;
+        if (k < 40) dragged = std::max(dragged, strain);
+        if (k >= 70) released = std::max(released, strain);
+    }
+    EXPECT_GT(dragged, 1.0f); // the case: out of reach
+    EXPECT_LE(released, 1.05f * 0.1f);
+}
+
 TEST(Implicit, PinsHoldAndAGrabMovesItsParticle) {
     SceneBuild scene = build_hang_scene(fabric_hang(24));
     Simulation sim(scene.cloth, scene.initial, implicit_params(1.0f / 30.0f, 10));

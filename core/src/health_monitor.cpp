@@ -228,7 +228,11 @@ std::string HealthMonitor::check(const Cloth& cloth, const SimulationParams& par
     double strain_bound = k_struct_ > 0.0 && rest_min_ > 0.0
                               ? std::sqrt(2.0 * energy_bound / k_struct_) / rest_min_
                               : 1e30;
-    if (params.strain_limit.ratio > 0.0f) strain_bound = std::min(strain_bound, 10.0 * params.strain_limit.ratio);
+    // A strain limit caps it (a limited cloth stretched 10 times the limit has failed), unless the user has dragged
+    // the cloth: a drag out of its reach stretches it whatever the limit does (the energy bound above, which takes in
+    // the drag's work at each move, still holds; released, the limit pulls it back: docs/implicit.md).
+    if (params.strain_limit.ratio > 0.0f && user_speed_ == 0.0f)
+        strain_bound = std::min(strain_bound, 10.0 * params.strain_limit.ratio);
     strain_bound = std::max(1.0, strain_bound);
     // However much energy gravity supplies (it grows as a failing cloth stretches downwards: an adversarial sweep's
     // 4 m ribbon reached strain 1,328 under a bound of 4,687), no cloth stretches to 51 times its length unless the

@@ -332,7 +332,9 @@ void Simulation::grab(std::size_t i, std::array<float, 3> target) {
     set_pinned(i, true);
     grabbed_ = i;
     grab_target_ = target;
-    grab_applied_ = target;
+    // Where the particle is: a target away from it is the user's move (the next step notes its speed for the monitor).
+    const StateBuffer& s = cur();
+    grab_applied_ = {s.x[i], s.y[i], s.z[i]};
     rebaseline_ = true;
 }
 
