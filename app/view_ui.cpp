@@ -464,6 +464,14 @@ void Viewer::ui_camera() {
                 "(the same colours, interpolated; much cheaper in software GL). On: lit per pixel at any size.");
     ImGui::TextDisabled("triangles %.1f px across: lit per %s", double(renderer_->drawn_edge_px()),
                         renderer_->lit_per_vertex() ? "vertex" : "pixel");
+    if (options_.overlap && !options_.demo_grab) { // (--demo-grab acts through the session every frame)
+        ImGui::Checkbox("draw between long steps", &interpolate_);
+        help_marker("On: while a step takes longer than a frame, the frames in between draw the blend of the last two "
+                    "states (one step behind the simulation), paced to the rate below; in software GL each drawn frame "
+                    "takes CPU from the simulation. Off: every frame waits for its step (--no-interpolate).");
+        if (interpolate_)
+            ImGui::SliderInt("frames/s between steps", &options_.blend_fps, 10, 240, "%d", clamp_flags);
+    }
     ImGui::TextDisabled("distance %.2f m, yaw %.0f deg, pitch %.0f deg", double(camera_.distance),
                         double(camera_.yaw) * 57.2958, double(camera_.pitch) * 57.2958);
 }

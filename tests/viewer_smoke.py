@@ -366,6 +366,7 @@ def main():
                         (["--scene", "nowhere"], "--scene"), (["--scene", "tshirt", "--size", "5"], "[10, 1000]"),
                         (["--solver", "newton"], "--solver"), (["--iterations", "0"], "[1, 1000]"),
                         (["--iterations", "10"], "--solver implicit"), (["--dt", "1"], "--dt"),
+                        (["--blend-fps", "5"], "[10, 240] frames/s"),
                         (["--frames", "1"], "xvfb-run")):
         p = subprocess.run([args.drape, "view"] + args_, capture_output=True, text=True, timeout=60, env=no_display)
         lines = p.stderr.strip().splitlines()
