@@ -503,12 +503,12 @@ def main():
         return 1
     print(f"ok: a run the health monitor stopped: exit 4, finite state kept, error '{stats['error'][:60]}...'")
 
-    # Steps longer than a frame (a 400 x 400 implicit hang in a small window): the frames between steps are drawn
+    # Steps longer than a frame (a 300 x 300 implicit hang in a small window): the frames between steps are drawn
     # blended (FrameInterpolator) without touching the simulation, so the run takes fewer steps than frames, and the
     # state it reaches is bit for bit the state of a run that waits for every step (--no-interpolate) after as many
     # steps. The iteration count is fixed (10 is the budget's floor), so the steps do not depend on wall time.
     tmp = tempfile.mkdtemp(prefix="drape_blend_")
-    base = [xvfb, "-s", "-screen 0 1600x1000x24", args.drape, "view", "--scene", "hang", "--size", "400",
+    base = [xvfb, "-s", "-screen 0 1600x1000x24", args.drape, "view", "--scene", "hang", "--size", "300",
             "--solver", "implicit", "--dt", "0.033333", "--iterations", "10", "--width", "640", "--height", "400",
             "--no-vsync", "--stats-json", "--blend-fps", "240"]
     runs = {}
