@@ -48,6 +48,14 @@ SimulationParams implicit_params(float dt, std::uint32_t iterations) {
     return p;
 }
 
+// The wool hang of n x n particles with 2 cm clips, frame-long implicit steps of 10 sweeps, the strain limit at 0.1.
+Simulation limited_hang(std::uint32_t n) {
+    SceneBuild scene = build_hang_scene(fabric_hang(n));
+    SimulationParams p = implicit_params(1.0f / 30.0f, 10);
+    p.strain_limit.ratio = 0.1f;
+    return Simulation(std::move(scene.cloth), scene.initial, p);
+}
+
 double max_distance(const Simulation& a, const Simulation& b) {
     double worst = 0.0;
     for (std::size_t i = 0; i < a.x().size(); ++i) {
@@ -636,10 +644,7 @@ TEST(Implicit, StrainLimitBoundsCompressionNextToTheClips) {
 // where it is reached |strain| 0.31 (compression) with the limit at 0.1; the frame form holds 0.100.
 TEST(Implicit, StrainLimitHoldsAroundAGrab) {
     const std::uint32_t n = 100;
-    SceneBuild scene = build_hang_scene(fabric_hang(n));
-    SimulationParams p = implicit_params(1.0f / 30.0f, 10);
-    p.strain_limit.ratio = 0.1f;
-    Simulation sim(std::move(scene.cloth), scene.initial, p);
+    Simulation sim = limited_hang(n);
     const std::size_t mid = std::size_t(n / 2) * n + n / 2;
     sim.grab(mid, {sim.x()[mid], sim.y()[mid], sim.z()[mid]});
     float worst = 0.0f;
@@ -659,10 +664,7 @@ TEST(Implicit, StrainLimitHoldsAroundAGrab) {
 // available, the drag's work included, as without a limit; released, the limit pulls the cloth back.
 TEST(Implicit, StrainLimitedClothDraggedOutOfReachRecovers) {
     const std::uint32_t n = 48;
-    SceneBuild scene = build_hang_scene(fabric_hang(n));
-    SimulationParams p = implicit_params(1.0f / 30.0f, 10);
-    p.strain_limit.ratio = 0.1f;
-    Simulation sim(std::move(scene.cloth), scene.initial, p);
+    Simulation sim = limited_hang(n);
     sim.step(5);
     sim.grab(n * n / 2, {0.0f, 0.1f, 0.0f}); // a sudden 10 cm grab of the centre
     float dragged = 0.0f, released = 0.0f;
