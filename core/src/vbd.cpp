@@ -430,6 +430,7 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     if (grid) {
         grid_->pack<Parallel>(st, pred_x_.data(), pred_y_.data(), pred_z_.data());
         args = grid_->packed_args(args);
+        grid_->cook_damping<Parallel>(args);
         x = grid_->x();
         y = grid_->y();
         z = grid_->z();

@@ -4,6 +4,7 @@
 // for bit.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -14,6 +15,7 @@
 #include "drape/cloth.hpp"
 #include "drape/colliders.hpp"
 #include "drape/implicit.hpp"
+#include "drape/simd.hpp"
 
 namespace drape::vbd {
 
@@ -154,65 +156,63 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
     const float m = 1.0f / a.inv_mass[i];
     // Inertia and air drag: m/h^2 (x - y) + m kr/h (x - x^n).
     const float mi = m * a.inv_h2, md = m * a.drag_over_h;
-    float gx = mi * (xi - a.px[i]) + md * dxi;
-    float gy = mi * (yi - a.py[i]) + md * dyi;
-    float gz = mi * (zi - a.pz[i]) + md * dzi;
-    float hxx = mi + md, hyy = hxx, hzz = hxx, hxy = 0.0f, hxz = 0.0f, hyz = 0.0f;
+    float gx = std::fma(mi, xi - a.px[i], md * dxi);
+    float gy = std::fma(mi, yi - a.py[i], md * dyi);
+    float gz = std::fma(mi, zi - a.pz[i], md * dzi);
+    const float base = mi + md;
+    float hxx = base, hyy = hxx, hzz = hxx, hxy = 0.0f, hxz = 0.0f, hyz = 0.0f;
     // The terms quadratic in x_i (inertia, drag, damping, bending) are tracked apart from the springs' stretch:
     // G restricted to x_i is then exactly qg . d + 1/2 d^T QH d + sum of the springs' stretch energies, which the
-    // line search below evaluates. QH is diagonal-free here: qh_* hold the quadratic terms' Hessian.
-    float qhxx = hxx, qhyy = hxx, qhzz = hxx, qhxy = 0.0f, qhxz = 0.0f, qhyz = 0.0f;
+    // line search below evaluates. qh_* hold the quadratic terms' Hessian; dh_* the springs' damping part of it,
+    // summed from zero (the SIMD grid sweeps read it cooked once per step: vbd_batch.hpp damping_q).
+    float dhxx = 0.0f, dhyy = 0.0f, dhzz = 0.0f, dhxy = 0.0f, dhxz = 0.0f, dhyz = 0.0f;
     float sgx = 0.0f, sgy = 0.0f, sgz = 0.0f; // the springs' stretch gradient
     // Springs: E = k/2 (L - l)^2, grad_i = -k (L - l) u (u from i to j); projected Hessian k (c I + (1 - c) u u^T),
     // c = max(0, 1 - l/L). Damping along n, the direction at the start of the step: grad_i = -(kd/h) (dd . n) n,
-    // dd = (x_j - x_j^n) - (x_i - x_i^n); Hessian (kd/h) n n^T.
+    // dd = (x_j - x_j^n) - (x_i - x_i^n) = d - n; Hessian (kd/h) n n^T.
+    // Written without branches and with fused multiply-adds, operation for operation as the SIMD kernel
+    // (vbd_batch.hpp solve_lanes), so that both give the same bits: a term that does not apply has a zero factor.
     for (std::uint32_t e = g.spring_offsets[i], end = g.spring_offsets[i + 1]; e < end; ++e) {
         const std::uint32_t j = g.spring_neighbour[e];
         const float k = g.spring_k[e], l = g.spring_rest[e];
         const float dx = a.x[j] - xi, dy = a.y[j] - yi, dz = a.z[j] - zi;
-        const float len2 = dx * dx + dy * dy + dz * dz;
-        if (len2 > 1e-24f) {
-            const float inv_len = 1.0f / std::sqrt(len2);
-            const float len = len2 * inv_len;
-            const float ux = dx * inv_len, uy = dy * inv_len, uz = dz * inv_len;
-            const float s = k * (len - l);
-            sgx -= s * ux;
-            sgy -= s * uy;
-            sgz -= s * uz;
-            const float c = k * std::max(0.0f, 1.0f - l * inv_len), cu = k - c;
-            hxx += c + cu * ux * ux;
-            hyy += c + cu * uy * uy;
-            hzz += c + cu * uz * uz;
-            hxy += cu * ux * uy;
-            hxz += cu * ux * uz;
-            hyz += cu * uy * uz;
-        } else if (l == 0.0f) { // a zero-length spring at its rest: E = k/2 |d|^2, Hessian k I
-            hxx += k;
-            hyy += k;
-            hzz += k;
-        }
+        const float len2 = std::fma(dz, dz, std::fma(dy, dy, dx * dx));
+        const bool stretched = len2 > 1e-24f;
+        const float inv_len = simd::rsqrt(stretched ? len2 : 1.0f); // as the SIMD kernel: no division
+        const float l0 = len2 * inv_len;
+        const float ux = dx * inv_len, uy = dy * inv_len, uz = dz * inv_len;
+        const float s = stretched ? k * (l0 - l) : 0.0f;
+        sgx = std::fma(-s, ux, sgx);
+        sgy = std::fma(-s, uy, sgy);
+        sgz = std::fma(-s, uz, sgz);
+        const float c = k * std::max(0.0f, std::fma(-l, inv_len, 1.0f));
+        // A zero-length spring at its rest: E = k/2 |d|^2, Hessian k I.
+        const float cm = stretched ? c : (l == 0.0f ? k : 0.0f), cu = stretched ? k - c : 0.0f;
+        const float tx = cu * ux, ty = cu * uy;
+        hxx += std::fma(tx, ux, cm);
+        hyy += std::fma(ty, uy, cm);
+        hzz += std::fma(cu * uz, uz, cm);
+        hxy = std::fma(tx, uy, hxy);
+        hxz = std::fma(tx, uz, hxz);
+        hyz = std::fma(ty, uz, hyz);
         const float kd = g.spring_kd[e] * a.inv_h;
-        if (kd > 0.0f) {
-            const float nx = a.x0[j] - a.x0[i], ny = a.y0[j] - a.y0[i], nz = a.z0[j] - a.z0[i];
-            const float n2 = nx * nx + ny * ny + nz * nz;
-            if (n2 > 1e-24f) {
-                const float inv_n2 = 1.0f / n2;
-                const float ddx = (a.x[j] - a.x0[j]) - dxi, ddy = (a.y[j] - a.y0[j]) - dyi,
-                            ddz = (a.z[j] - a.z0[j]) - dzi;
-                const float p = kd * (ddx * nx + ddy * ny + ddz * nz) * inv_n2; // kd (dd . n) / |n|^2 ...
-                gx -= p * nx;
-                gy -= p * ny;
-                gz -= p * nz;
-                const float q = kd * inv_n2;
-                qhxx += q * nx * nx;
-                qhyy += q * ny * ny;
-                qhzz += q * nz * nz;
-                qhxy += q * nx * ny;
-                qhxz += q * nx * nz;
-                qhyz += q * ny * nz;
-            }
-        }
+        const float nx = a.x0[j] - a.x0[i], ny = a.y0[j] - a.y0[i], nz = a.z0[j] - a.z0[i];
+        const float n2 = std::fma(nz, nz, std::fma(ny, ny, nx * nx));
+        const bool damped = kd > 0.0f && n2 > 1e-24f;
+        const float q = damped ? kd / n2 : 0.0f; // kd / |n|^2
+        const float qx = q * nx, qy = q * ny;
+        dhxx = std::fma(qx, nx, dhxx);
+        dhyy = std::fma(qy, ny, dhyy);
+        dhzz = std::fma(q * nz, nz, dhzz);
+        dhxy = std::fma(qx, ny, dhxy);
+        dhxz = std::fma(qx, nz, dhxz);
+        dhyz = std::fma(qy, nz, dhyz);
+        const float p = q * std::fma(dz - nz, nz, std::fma(dy - ny, ny, (dx - nx) * nx));
+        gx = std::fma(-p, nx, gx);
+        gy = std::fma(-p, ny, gy);
+        gz = std::fma(-p, nz, gz);
     }
+    float qhxx = base + dhxx, qhyy = base + dhyy, qhzz = base + dhzz, qhxy = dhxy, qhxz = dhxz, qhyz = dhyz;
     // Bending: grad_i = sum_j Q_ij [(x_j - x_i) + beta/h ((x_j - x_j^n) - (x_i - x_i^n))] (rows of Q sum to 0),
     // Hessian Q_ii (1 + beta/h) I.
     if (!g.bend_diag.empty()) {
@@ -221,9 +221,9 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
         for (std::uint32_t e = g.bend_offsets[i], end = g.bend_offsets[i + 1]; e < end; ++e) {
             const std::uint32_t j = g.bend_neighbour[e];
             const float q = g.bend_q[e];
-            bx += q * ((a.x[j] - xi) + bh * ((a.x[j] - a.x0[j]) - dxi));
-            by += q * ((a.y[j] - yi) + bh * ((a.y[j] - a.y0[j]) - dyi));
-            bz += q * ((a.z[j] - zi) + bh * ((a.z[j] - a.z0[j]) - dzi));
+            bx = std::fma(q, std::fma(bh, (a.x[j] - a.x0[j]) - dxi, a.x[j] - xi), bx);
+            by = std::fma(q, std::fma(bh, (a.y[j] - a.y0[j]) - dyi, a.y[j] - yi), by);
+            bz = std::fma(q, std::fma(bh, (a.z[j] - a.z0[j]) - dzi, a.z[j] - zi), bz);
         }
         gx += bx;
         gy += by;
@@ -234,9 +234,9 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
         qhzz += d;
     }
     // Total: quadratic terms plus the springs' stretch (hxx.. so far hold inertia + the springs' projected Hessian).
-    hxx += qhxx - (mi + md);
-    hyy += qhyy - (mi + md);
-    hzz += qhzz - (mi + md);
+    hxx += qhxx - base;
+    hyy += qhyy - base;
+    hzz += qhzz - base;
     hxy += qhxy;
     hxz += qhxz;
     hyz += qhyz;
@@ -271,12 +271,14 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
         for (std::uint32_t s = g.spring_offsets[i], end = g.spring_offsets[i + 1]; s < end; ++s) {
             const std::uint32_t j = g.spring_neighbour[s];
             const float dx = a.x[j] - xi, dy = a.y[j] - yi, dz = a.z[j] - zi;
-            const float l0 = std::sqrt(dx * dx + dy * dy + dz * dz);
-            const float l1 = std::sqrt((dx - px) * (dx - px) + (dy - py) * (dy - py) + (dz - pz) * (dz - pz));
+            const float len2 = std::fma(dz, dz, std::fma(dy, dy, dx * dx));
+            const float l0 = len2 * simd::rsqrt(len2 > 1e-24f ? len2 : 1.0f);
+            const float ex = dx - px, ey = dy - py, ez = dz - pz;
+            const float l1 = std::sqrt(std::fma(ez, ez, std::fma(ey, ey, ex * ex)));
             const float sum = l0 + l1;
             if (!(sum > 0.0f)) continue;
-            const float dl = (p2 - 2.0f * (dx * px + dy * py + dz * pz)) / sum;
-            e += 0.5f * g.spring_k[s] * dl * (sum - 2.0f * g.spring_rest[s]);
+            const float dl = std::fma(-2.0f, std::fma(dz, pz, std::fma(dy, py, dx * px)), p2) / sum;
+            e += 0.5f * g.spring_k[s] * dl * std::fma(-2.0f, g.spring_rest[s], sum);
         }
         return e;
     };

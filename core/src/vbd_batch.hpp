@@ -25,6 +25,30 @@ struct VbdSlices {
     AlignedArray<float> bend_q;
 };
 
+/// Spring damping's coefficient q = (kd / h) / |n|^2 of one slot (0 where kd = 0 or n, the spring at the start of the
+/// step, has no length), and its Hessian block q n n^T added to an accumulator: both depend only on the state at the
+/// start of the step, so a grid cloth computes them once per step (GridLayout::cook_damping) and its sweeps read
+/// them; the other sources compute them in the sweep with these same operations (the same bits).
+inline simd::fbatch damping_q(simd::fbatch kd, simd::fbatch inv_h, simd::fbatch nx, simd::fbatch ny,
+                              simd::fbatch nz) noexcept {
+    const simd::fbatch zero(0.0f), one(1.0f), k = kd * inv_h;
+    const simd::fbatch n2 = simd::fma(nz, nz, simd::fma(ny, ny, nx * nx));
+    const simd::fmask damped = (k > zero) & (n2 > simd::fbatch(1e-24f));
+    return simd::select(damped, k / simd::select(damped, n2, one), zero);
+}
+struct DampingHessian {
+    simd::fbatch xx = simd::fbatch(0.0f), yy = xx, zz = xx, xy = xx, xz = xx, yz = xx;
+    void add(simd::fbatch q, simd::fbatch nx, simd::fbatch ny, simd::fbatch nz) noexcept {
+        const simd::fbatch qx = q * nx, qy = q * ny;
+        xx = simd::fma(qx, nx, xx);
+        yy = simd::fma(qy, ny, yy);
+        zz = simd::fma(q * nz, nz, zz);
+        xy = simd::fma(qx, ny, xy);
+        xz = simd::fma(qx, nz, xz);
+        yz = simd::fma(qy, nz, yz);
+    }
+};
+
 /// The local step of simd::width vertices at once, one per lane, from a source of their state and their springs and
 /// bending rows (slot by slot; padded slots add exactly nothing). Writes the new positions and |g|^2 per lane.
 /// Sources: SliceSource below (a colour's slice, neighbours gathered) and GridSource (vbd_grid.hpp: a grid cloth in
@@ -45,11 +69,13 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
     w = simd::select(w == zero, one, w); // fixed lanes are not written: keep their arithmetic finite
     const fbatch m = one / w;
     const fbatch mi = m * fbatch(a.inv_h2), md = m * fbatch(a.drag_over_h);
-    fbatch gx = mi * (xi - src.own(a.px)) + md * dxi;
-    fbatch gy = mi * (yi - src.own(a.py)) + md * dyi;
-    fbatch gz = mi * (zi - src.own(a.pz)) + md * dzi;
-    fbatch hxx = mi + md, hyy = hxx, hzz = hxx, hxy = zero, hxz = zero, hyz = zero;
-    fbatch qhxx = hxx, qhyy = hxx, qhzz = hxx, qhxy = zero, qhxz = zero, qhyz = zero;
+    fbatch gx = simd::fma(mi, xi - src.own(a.px), md * dxi);
+    fbatch gy = simd::fma(mi, yi - src.own(a.py), md * dyi);
+    fbatch gz = simd::fma(mi, zi - src.own(a.pz), md * dzi);
+    const fbatch base = mi + md;
+    fbatch hxx = base, hyy = hxx, hzz = hxx, hxy = zero, hxz = zero, hyz = zero;
+    DampingHessian dh; // the springs' damping, summed from zero (cooked per step by a grid source)
+    if constexpr (Src::cooked_damping) dh = src.damping_hessian();
     fbatch sgx = zero, sgy = zero, sgz = zero;
     const fbatch inv_h(a.inv_h), tiny(1e-24f);
     const std::size_t ss = src.springs();
@@ -62,54 +88,50 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
         fbatch xj, yj, zj;
         src.spring_pos(s, a.x, a.y, a.z, xj, yj, zj);
         const fbatch dx = xj - xi, dy = yj - yi, dz = zj - zi;
-        const fbatch len2 = dx * dx + dy * dy + dz * dz;
-        // One square root serves both: sqrt(select(c, a, 1)) = select(c, sqrt(a), 1) exactly (sqrt(1) = 1).
-        const fbatch l0 = xsimd::sqrt(len2);
+        const fbatch len2 = simd::fma(dz, dz, simd::fma(dy, dy, dx * dx));
+        // 1/|d| to ~23 bits without a division (rsqrt14 and a Newton step: the divider is this kernel's bottleneck;
+        // docs/implicit.md "Fused and division-free sweeps"); |d| = |d|^2 / |d|.
+        const fmask stretched = len2 > tiny;
+        const fbatch inv_len = simd::rsqrt(simd::select(stretched, len2, one));
+        const fbatch l0 = len2 * inv_len;
         if (s < cached_slots) {
             simd::store(cache_dx[s], dx);
             simd::store(cache_dy[s], dy);
             simd::store(cache_dz[s], dz);
             simd::store(cache_l0[s], l0);
         }
-        const fmask stretched = len2 > tiny;
-        const fbatch inv_len = one / simd::select(stretched, l0, one);
-        const fbatch len = len2 * inv_len;
         const fbatch ux = dx * inv_len, uy = dy * inv_len, uz = dz * inv_len;
-        const fbatch sforce = k * (len - l);
-        sgx = sgx - simd::select(stretched, sforce * ux, zero);
-        sgy = sgy - simd::select(stretched, sforce * uy, zero);
-        sgz = sgz - simd::select(stretched, sforce * uz, zero);
-        const fbatch c = k * xsimd::max(zero, one - l * inv_len), cu = k - c;
-        hxx = hxx + simd::select(stretched, c + cu * ux * ux, zero);
-        hyy = hyy + simd::select(stretched, c + cu * uy * uy, zero);
-        hzz = hzz + simd::select(stretched, c + cu * uz * uz, zero);
-        hxy = hxy + simd::select(stretched, cu * ux * uy, zero);
-        hxz = hxz + simd::select(stretched, cu * ux * uz, zero);
-        hyz = hyz + simd::select(stretched, cu * uy * uz, zero);
-        const fmask at_rest = (~stretched) & (l == zero);
-        hxx = hxx + simd::select(at_rest, k, zero);
-        hyy = hyy + simd::select(at_rest, k, zero);
-        hzz = hzz + simd::select(at_rest, k, zero);
-        const fbatch kd = src.spring_kd(s) * inv_h;
+        const fbatch sforce = simd::select(stretched, k * (l0 - l), zero);
+        sgx = simd::fnma(sforce, ux, sgx);
+        sgy = simd::fnma(sforce, uy, sgy);
+        sgz = simd::fnma(sforce, uz, sgz);
+        const fbatch c = k * xsimd::max(zero, simd::fnma(l, inv_len, one));
+        // A zero-length spring at its rest: Hessian k I.
+        const fbatch cm = simd::select(stretched, c, simd::select(l == zero, k, zero));
+        const fbatch cu = simd::select(stretched, k - c, zero);
+        const fbatch tx = cu * ux, ty = cu * uy;
+        hxx = hxx + simd::fma(tx, ux, cm);
+        hyy = hyy + simd::fma(ty, uy, cm);
+        hzz = hzz + simd::fma(cu * uz, uz, cm);
+        hxy = simd::fma(tx, uy, hxy);
+        hxz = simd::fma(tx, uz, hxz);
+        hyz = simd::fma(ty, uz, hyz);
         fbatch x0j, y0j, z0j;
         src.spring_pos(s, a.x0, a.y0, a.z0, x0j, y0j, z0j);
         const fbatch nx = x0j - x0i, ny = y0j - y0i, nz = z0j - z0i;
-        const fbatch n2 = nx * nx + ny * ny + nz * nz;
-        const fmask damped = (kd > zero) & (n2 > tiny);
-        const fbatch inv_n2 = one / simd::select(damped, n2, one);
-        const fbatch ddx = (xj - x0j) - dxi, ddy = (yj - y0j) - dyi, ddz = (zj - z0j) - dzi;
-        const fbatch p = kd * (ddx * nx + ddy * ny + ddz * nz) * inv_n2;
-        gx = gx - simd::select(damped, p * nx, zero);
-        gy = gy - simd::select(damped, p * ny, zero);
-        gz = gz - simd::select(damped, p * nz, zero);
-        const fbatch q = kd * inv_n2;
-        qhxx = qhxx + simd::select(damped, q * nx * nx, zero);
-        qhyy = qhyy + simd::select(damped, q * ny * ny, zero);
-        qhzz = qhzz + simd::select(damped, q * nz * nz, zero);
-        qhxy = qhxy + simd::select(damped, q * nx * ny, zero);
-        qhxz = qhxz + simd::select(damped, q * nx * nz, zero);
-        qhyz = qhyz + simd::select(damped, q * ny * nz, zero);
+        fbatch q;
+        if constexpr (Src::cooked_damping) {
+            q = src.damping_q(s);
+        } else {
+            q = damping_q(src.spring_kd(s), inv_h, nx, ny, nz);
+            dh.add(q, nx, ny, nz);
+        }
+        const fbatch p = q * simd::fma(dz - nz, nz, simd::fma(dy - ny, ny, (dx - nx) * nx));
+        gx = simd::fnma(p, nx, gx);
+        gy = simd::fnma(p, ny, gy);
+        gz = simd::fnma(p, nz, gz);
     }
+    fbatch qhxx = base + dh.xx, qhyy = base + dh.yy, qhzz = base + dh.zz, qhxy = dh.xy, qhxz = dh.xz, qhyz = dh.yz;
     if (!g.bend_diag.empty()) {
         const fbatch bh = fbatch(g.bend_beta) * inv_h;
         fbatch bx = zero, by = zero, bz = zero;
@@ -119,9 +141,9 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
             fbatch xj, yj, zj, x0j, y0j, z0j;
             src.bend_pos(s, a.x, a.y, a.z, xj, yj, zj);
             src.bend_pos(s, a.x0, a.y0, a.z0, x0j, y0j, z0j);
-            bx = bx + q * ((xj - xi) + bh * ((xj - x0j) - dxi));
-            by = by + q * ((yj - yi) + bh * ((yj - y0j) - dyi));
-            bz = bz + q * ((zj - zi) + bh * ((zj - z0j) - dzi));
+            bx = simd::fma(q, simd::fma(bh, (xj - x0j) - dxi, xj - xi), bx);
+            by = simd::fma(q, simd::fma(bh, (yj - y0j) - dyi, yj - yi), by);
+            bz = simd::fma(q, simd::fma(bh, (zj - z0j) - dzi, zj - zi), bz);
         }
         gx = gx + bx;
         gy = gy + by;
@@ -131,9 +153,9 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
         qhyy = qhyy + d;
         qhzz = qhzz + d;
     }
-    hxx = hxx + (qhxx - (mi + md));
-    hyy = hyy + (qhyy - (mi + md));
-    hzz = hzz + (qhzz - (mi + md));
+    hxx = hxx + (qhxx - base);
+    hyy = hyy + (qhyy - base);
+    hzz = hzz + (qhzz - base);
     hxy = hxy + qhxy;
     hxz = hxz + qhxz;
     hyz = hyz + qhyz;
@@ -165,13 +187,17 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
                 dx = xj - xi;
                 dy = yj - yi;
                 dz = zj - zi;
-                l0 = xsimd::sqrt(dx * dx + dy * dy + dz * dz);
+                const fbatch len2 = simd::fma(dz, dz, simd::fma(dy, dy, dx * dx));
+                l0 = len2 * simd::rsqrt(simd::select(len2 > tiny, len2, one));
             }
-            const fbatch l1 = xsimd::sqrt((dx - px) * (dx - px) + (dy - py) * (dy - py) + (dz - pz) * (dz - pz));
+            const fbatch ex = dx - px, ey = dy - py, ez = dz - pz;
+            const fbatch l1 = xsimd::sqrt(simd::fma(ez, ez, simd::fma(ey, ey, ex * ex)));
             const fbatch sum = l0 + l1;
             const fmask live = sum > zero;
-            const fbatch dl = (p2 - fbatch(2.0f) * (dx * px + dy * py + dz * pz)) / simd::select(live, sum, one);
-            const fbatch de = fbatch(0.5f) * src.spring_k(s) * dl * (sum - fbatch(2.0f) * src.spring_rest(s));
+            const fbatch two(2.0f);
+            const fbatch dl =
+                simd::fnma(two, simd::fma(dz, pz, simd::fma(dy, py, dx * px)), p2) / simd::select(live, sum, one);
+            const fbatch de = fbatch(0.5f) * src.spring_k(s) * dl * simd::fnma(two, src.spring_rest(s), sum);
             e = e + simd::select(live, de, zero);
         }
         return e;
@@ -206,6 +232,7 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
 
 /// A slice of a colour's vertices (VbdSlices): own state and neighbours gathered by index.
 struct SliceSource {
+    static constexpr bool cooked_damping = false;
     const VbdSlices& sl;
     const VbdGraph& graph;
     simd::ibatch vi;

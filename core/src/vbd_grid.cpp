@@ -137,12 +137,15 @@ std::unique_ptr<GridLayout> GridLayout::cook(const VbdGraph& g, std::uint32_t ro
     deltas(L->bend_dir_, L->bend_delta_);
 
     for (AlignedArray<float>* f : {&L->x_, &L->y_, &L->z_, &L->x0_, &L->y0_, &L->z0_, &L->px_, &L->py_, &L->pz_,
-                                   &L->inv_mass_, &L->diag_}) {
+                                   &L->inv_mass_, &L->diag_, &L->dh_[0], &L->dh_[1], &L->dh_[2], &L->dh_[3],
+                                   &L->dh_[4], &L->dh_[5]}) {
         f->reset(L->cells_);
         std::fill_n(f->data(), L->cells_, 0.0f);
     }
-    for (AlignedArray<float>* f : {&L->k_, &L->kd_, &L->rest_})
+    for (AlignedArray<float>* f : {&L->k_, &L->kd_, &L->rest_, &L->dq_}) {
         f->reset(L->spring_dir_.size() * L->cells_);
+        std::fill_n(f->data(), f->size(), 0.0f);
+    }
     L->q_.reset(std::max<std::size_t>(1, L->bend_dir_.size()) * L->cells_);
     L->refresh(g);
     return L;
@@ -218,6 +221,38 @@ template <bool Parallel> void GridLayout::unpack(const LevelState& s) const {
     });
 }
 
+template <bool Parallel> void GridLayout::cook_damping(const SweepArgs& a) {
+    constexpr std::size_t W = simd::width;
+    const simd::fbatch inv_h(a.inv_h);
+    const std::size_t slots = spring_dir_.size();
+    for_each_index<Parallel>(colour_count() * chunks_, [&](std::size_t job) {
+        const std::uint32_t cls = colour_class_[job / chunks_];
+        const std::size_t chunk = job % chunks_;
+        const std::int32_t* sd = spring_delta_.data() + std::size_t(cls) * slots;
+        const std::int32_t* bd = bend_delta_.data() + std::size_t(cls) * bend_dir_.size();
+        for (std::size_t b = chunk * batches_per_chunk_, b1 = std::min(batches_, b + batches_per_chunk_); b < b1; ++b) {
+            const std::size_t o = class_base(cls) + b * W;
+            const GridSource src{*this, o, sd, bd};
+            const simd::fbatch x0i = src.own(a.x0), y0i = src.own(a.y0), z0i = src.own(a.z0);
+            DampingHessian h;
+            for (std::size_t s = 0; s < slots; ++s) {
+                simd::fbatch x0j, y0j, z0j;
+                src.spring_pos(s, a.x0, a.y0, a.z0, x0j, y0j, z0j);
+                const simd::fbatch nx = x0j - x0i, ny = y0j - y0i, nz = z0j - z0i;
+                const simd::fbatch q = damping_q(src.spring_kd(s), inv_h, nx, ny, nz);
+                h.add(q, nx, ny, nz);
+                simd::store(dq_.data() + spring_at(o, s), q);
+            }
+            simd::store(dh_[0].data() + o, h.xx);
+            simd::store(dh_[1].data() + o, h.yy);
+            simd::store(dh_[2].data() + o, h.zz);
+            simd::store(dh_[3].data() + o, h.xy);
+            simd::store(dh_[4].data() + o, h.xz);
+            simd::store(dh_[5].data() + o, h.yz);
+        }
+    });
+}
+
 SweepArgs GridLayout::packed_args(SweepArgs a) noexcept {
     a.x0 = x0_.data();
     a.y0 = y0_.data();
@@ -234,6 +269,8 @@ SweepArgs GridLayout::packed_args(SweepArgs a) noexcept {
 
 template void GridLayout::pack<true>(const LevelState&, const float*, const float*, const float*);
 template void GridLayout::pack<false>(const LevelState&, const float*, const float*, const float*);
+template void GridLayout::cook_damping<true>(const SweepArgs&);
+template void GridLayout::cook_damping<false>(const SweepArgs&);
 template void GridLayout::unpack<true>(const LevelState&) const;
 template void GridLayout::unpack<false>(const LevelState&) const;
 

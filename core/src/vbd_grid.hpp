@@ -55,6 +55,10 @@ class GridLayout {
     /// Copies the packed iterate back into s.x, s.y, s.z.
     template <bool Parallel> void unpack(const LevelState& s) const;
 
+    /// Cooks the springs' damping of this step (vbd_batch.hpp damping_q, DampingHessian) from the packed x^n, after
+    /// pack: it depends only on the state at the start of the step, so the sweeps read it instead of recomputing it.
+    template <bool Parallel> void cook_damping(const SweepArgs& packed);
+
     /// The sweep arguments over the packed state (the rest of `a` kept).
     SweepArgs packed_args(SweepArgs a) noexcept;
     float* x() noexcept { return x_.data(); }
@@ -102,12 +106,15 @@ class GridLayout {
     std::vector<std::int32_t> spring_delta_, bend_delta_; ///< per class x slot: neighbour cell - own cell
     AlignedArray<float> k_, kd_, rest_, q_;        ///< per cell x slot (spring_at, bend_at)
     AlignedArray<float> diag_;                     ///< per cell: Q_ii
+    AlignedArray<float> dq_;                       ///< per cell x slot (spring_at): this step's damping_q
+    AlignedArray<float> dh_[6];                    ///< per cell: this step's DampingHessian (xx yy zz xy xz yz)
     AlignedArray<float> x_, y_, z_, x0_, y0_, z0_, px_, py_, pz_, inv_mass_; ///< packed state, per cell
 };
 
 /// The batch of simd::width cells starting at `o` (solve_lanes's source): own values and neighbours by contiguous
 /// loads at the class's constant offsets.
 struct GridSource {
+    static constexpr bool cooked_damping = true;
     const GridLayout& g;
     std::size_t o;
     const std::int32_t* sd; ///< this class's spring deltas
@@ -121,6 +128,17 @@ struct GridSource {
     void spring_pos(std::size_t s, const float* x, const float* y, const float* z, simd::fbatch& ox, simd::fbatch& oy,
                     simd::fbatch& oz) const noexcept {
         load3(std::ptrdiff_t(o) + sd[s], x, y, z, ox, oy, oz);
+    }
+    simd::fbatch damping_q(std::size_t s) const noexcept { return simd::load(g.dq_.data() + g.spring_at(o, s)); }
+    DampingHessian damping_hessian() const noexcept {
+        DampingHessian h;
+        h.xx = simd::load(g.dh_[0].data() + o);
+        h.yy = simd::load(g.dh_[1].data() + o);
+        h.zz = simd::load(g.dh_[2].data() + o);
+        h.xy = simd::load(g.dh_[3].data() + o);
+        h.xz = simd::load(g.dh_[4].data() + o);
+        h.yz = simd::load(g.dh_[5].data() + o);
+        return h;
     }
     simd::fbatch bend_q(std::size_t s) const noexcept { return simd::load(g.q_.data() + g.bend_at(o, s)); }
     void bend_pos(std::size_t s, const float* x, const float* y, const float* z, simd::fbatch& ox, simd::fbatch& oy,

@@ -2,6 +2,7 @@
 // AVX-512) and the few helpers below, so the rest of the engine never depends on the SIMD library's API directly.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <xsimd/xsimd.hpp>
@@ -73,6 +74,18 @@ inline fbatch rsqrt(fbatch x) noexcept {
     return y * fnma(hx * y, y, fbatch(1.5f));
 #else
     return fbatch(1.0f) / xsimd::sqrt(x);
+#endif
+}
+
+/// rsqrt for one float, bit for bit one lane of rsqrt above (the same estimate, the same Newton step): the scalar
+/// reference of a kernel that uses rsqrt gives its bits.
+inline float rsqrt(float x) noexcept {
+#if defined(__AVX512F__)
+    const float y = _mm_cvtss_f32(_mm_rsqrt14_ss(_mm_setzero_ps(), _mm_set_ss(x)));
+    const float hx = 0.5f * x;
+    return y * std::fma(-(hx * y), y, 1.5f);
+#else
+    return 1.0f / std::sqrt(x);
 #endif
 }
 
