@@ -13,6 +13,7 @@
 // chunk and the chunks in order; interpolation is per node; so every thread count gives the same bits. No allocation:
 // the scratch is cooked with the solver (cook_implicit).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 
@@ -86,19 +87,23 @@ std::uint32_t coarse_sweeps(const SimulationParams& p, double sweep_factor, std:
 constexpr double coarse_share_max = 0.7;
 constexpr std::size_t coarsest_particles = 16;
 
-/// out[k] = the transfer of src (less base, when given) onto target node k (LevelTransfer), per node in parallel.
-template <bool Parallel>
-void transfer(const LevelTransfer& t, const float* src, const float* base, float* out) {
+/// out[a][k] = the transfer of src[a] (less base[a], when base is given) onto target node k (LevelTransfer), for K
+/// arrays at once (each node's sources and weights read once), per node in parallel.
+template <bool Parallel, std::size_t K>
+void transfer(const LevelTransfer& t, const std::array<const float*, K>& src, const std::array<const float*, K>* base,
+              const std::array<float*, K>& out) {
     const std::size_t count = t.size();
     for_each_index<Parallel>((count + block_particles - 1) / block_particles, [&](std::size_t blk) {
         for (std::size_t k = blk * block_particles, end = std::min(count, (blk + 1) * block_particles); k < end; ++k) {
             const auto& i = t.index[k];
             const auto& w = t.weight[k];
-            float v = 0.0f, b = 0.0f;
-            for (std::size_t c = 0; c < LevelTransfer::width; ++c) v += w[c] * src[i[c]];
-            if (base)
-                for (std::size_t c = 0; c < LevelTransfer::width; ++c) b += w[c] * base[i[c]];
-            out[k] = v - b;
+            for (std::size_t a = 0; a < K; ++a) {
+                float v = 0.0f, b = 0.0f;
+                for (std::size_t c = 0; c < LevelTransfer::width; ++c) v += w[c] * src[a][i[c]];
+                if (base)
+                    for (std::size_t c = 0; c < LevelTransfer::width; ++c) b += w[c] * (*base)[a][i[c]];
+                out[a][k] = v - b;
+            }
         }
     });
 }
@@ -333,20 +338,17 @@ template <bool Parallel> bool Simulation::multilevel_guess() {
         CoarseLevel& L = is.coarse[l];
         const std::size_t count = L.cloth.particle_count;
         const LevelTransfer& from_fine = L.from_fine;
-        transfer<Parallel>(from_fine, a.x.data(), nullptr, L.x0.data());
-        transfer<Parallel>(from_fine, a.y.data(), nullptr, L.y0.data());
-        transfer<Parallel>(from_fine, a.z.data(), nullptr, L.z0.data());
-        transfer<Parallel>(from_fine, a.u.data(), nullptr, L.vx.data());
-        transfer<Parallel>(from_fine, a.v.data(), nullptr, L.vy.data());
-        transfer<Parallel>(from_fine, a.w.data(), nullptr, L.vz.data());
-        transfer<Parallel>(from_fine, b.x.data(), nullptr, L.gx.data());
-        transfer<Parallel>(from_fine, b.y.data(), nullptr, L.gy.data());
-        transfer<Parallel>(from_fine, b.z.data(), nullptr, L.gz.data());
+        transfer<Parallel, 9>(from_fine,
+                              {a.x.data(), a.y.data(), a.z.data(), a.u.data(), a.v.data(), a.w.data(), b.x.data(),
+                               b.y.data(), b.z.data()},
+                              nullptr,
+                              {L.x0.data(), L.y0.data(), L.z0.data(), L.vx.data(), L.vy.data(), L.vz.data(),
+                               L.gx.data(), L.gy.data(), L.gz.data()});
         if (l + 1 < is.coarse.size()) { // the next coarser level's correction of the guess
             const CoarseLevel& C = is.coarse[l + 1];
-            transfer<Parallel>(C.to_finer, C.x.data(), C.gx.data(), L.x.data());
-            transfer<Parallel>(C.to_finer, C.y.data(), C.gy.data(), L.y.data());
-            transfer<Parallel>(C.to_finer, C.z.data(), C.gz.data(), L.z.data());
+            const std::array<const float*, 3> base{C.gx.data(), C.gy.data(), C.gz.data()};
+            transfer<Parallel, 3>(C.to_finer, {C.x.data(), C.y.data(), C.z.data()}, &base,
+                                  {L.x.data(), L.y.data(), L.z.data()});
         } else {
             std::fill(L.x.begin(), L.x.end(), 0.0f);
             std::fill(L.y.begin(), L.y.end(), 0.0f);
@@ -418,9 +420,8 @@ template <bool Parallel> bool Simulation::multilevel_guess() {
     float* cx = is.corr_x.data();
     float* cy = is.corr_y.data();
     float* cz = is.corr_z.data();
-    transfer<Parallel>(C.to_finer, C.x.data(), C.gx.data(), cx);
-    transfer<Parallel>(C.to_finer, C.y.data(), C.gy.data(), cy);
-    transfer<Parallel>(C.to_finer, C.z.data(), C.gz.data(), cz);
+    const std::array<const float*, 3> base{C.gx.data(), C.gy.data(), C.gz.data()};
+    transfer<Parallel, 3>(C.to_finer, {C.x.data(), C.y.data(), C.z.data()}, &base, {cx, cy, cz});
     const std::size_t n = cloth_.particle_count;
     auto add = [&](float scale) {
         for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
