@@ -280,6 +280,12 @@ constexpr std::size_t vbd_chunk = 256; ///< vertices per parallel chunk of a col
 /// 50 x 50 level went parallel); with 64-cell chunks (vbd_grid.cpp) 1024 -> 512 27.7-28.2 -> 25.6-25.9 ms (its 25 x 25
 /// level too); 128 the same as 512; N = 316 unchanged by any of them.
 constexpr std::size_t serial_below = 512;
+/// The same for a cloth whose sweeps run on the grid layout. 2026-11-30 (2-core AVX-512 Intel machine, the fused
+/// sweeps: a batch costs less, so a parallel loop's start-up counts more; drape_implicit realtime --n 100,316
+/// --threads 2 --iterations 10 --strain-limit 0.095, real-time factor, runs alternated): 512 -> 4096 N = 100
+/// 7.04 / 7.61 / 7.73 -> 8.19 / 8.46 (its 50 x 50 level serial again), N = 316 0.98 / 0.98 / 0.99 -> 0.95 / 0.99;
+/// 8192 (N = 316's 79 x 79 level serial too) 8.36 / 8.38 and 0.93 / 0.96. Meshes (slices) keep 512: not measured.
+constexpr std::size_t serial_below_grid = 4096;
 
 /// One coordinate of the Chebyshev pass over [begin, end): x holds the sweeps' iterate xbar^(k), prev holds x^(k-2)
 /// and receives x^(k) = w (xbar^(k) - x^(k-2)) + x^(k-2) (pinned points, inverse mass 0, keep xbar), which x receives
@@ -415,7 +421,7 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     // A small cloth (the multilevel solver's coarse levels) runs serially: a parallel loop per colour costs a few
     // microseconds to start, more than such a colour's work, and the serial twin gives the same bits.
     if constexpr (Parallel)
-        if (n < serial_below) return run<false>(st, ip, h, air_drag);
+        if (n < (grid_sweeps() ? serial_below_grid : serial_below)) return run<false>(st, ip, h, air_drag);
     const float inv_h = 1.0f / h;
     const float* inv_mass = st.inv_mass;
     float *x = st.x, *y = st.y, *z = st.z;
