@@ -615,6 +615,30 @@ void Solver::gradient(const Point& st, float h, float air_drag, float* gx, float
     const SweepArgs args{st.x0,       st.y0,    st.z0,         pred_x_.data(),   pred_y_.data(), pred_z_.data(),
                          st.x,        st.y,     st.z,          st.inv_mass,      &graph_,        inv_h * inv_h,
                          air_drag * inv_h, inv_h};
+    if (simd_) { // the slices (every vertex is in one), simd::width vertices at once: solve_vertex<true>'s bits
+        constexpr std::size_t W = simd::width, slices_per_block = block_particles / W;
+        const VbdSlices& sl = *slices_;
+        const std::size_t slices = sl.lanes.size();
+        for_each_index<Parallel>((slices + slices_per_block - 1) / slices_per_block, [&](std::size_t blk) {
+            alignas(64) float ox[W], oy[W], oz[W];
+            for (std::size_t slice = blk * slices_per_block, end = std::min(slices, (blk + 1) * slices_per_block);
+                 slice < end; ++slice) {
+                simd::fbatch bx, by, bz, b2;
+                solve_lanes<true>(SliceSource(sl, graph_, slice), args, bx, by, bz, b2);
+                simd::store(ox, bx);
+                simd::store(oy, by);
+                simd::store(oz, bz);
+                for (std::uint32_t lane = 0; lane < sl.lanes[slice]; ++lane) {
+                    const std::uint32_t i = sl.vertex[slice * W + lane];
+                    const bool movable = st.inv_mass[i] != 0.0f;
+                    gx[i] = movable ? ox[lane] : 0.0f;
+                    gy[i] = movable ? oy[lane] : 0.0f;
+                    gz[i] = movable ? oz[lane] : 0.0f;
+                }
+            }
+        });
+        return;
+    }
     for_each_index<Parallel>((n + block_particles - 1) / block_particles, [&](std::size_t blk) {
         for (std::size_t i = blk * block_particles, end = std::min(n, (blk + 1) * block_particles); i < end; ++i) {
             float g[3] = {0.0f, 0.0f, 0.0f};

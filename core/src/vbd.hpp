@@ -106,7 +106,8 @@ class Solver {
         const float* inv_mass; ///< 0 = fixed
     };
     /// The gradient of the step's objective G at p.x (N per vertex; 0 at fixed vertices), on the prediction filled
-    /// in; no step taken. No allocation.
+    /// in; no step taken. No allocation. SIMD on the slices (set_simd, default) or solve_vertex<true> vertex by
+    /// vertex: the same bits.
     template <bool Parallel>
     void gradient(const Point& p, float h, float air_drag, float* gx, float* gy, float* gz) const;
 

@@ -50,11 +50,12 @@ struct DampingHessian {
 };
 
 /// The local step of simd::width vertices at once, one per lane, from a source of their state and their springs and
-/// bending rows (slot by slot; padded slots add exactly nothing). Writes the new positions and |g|^2 per lane.
+/// bending rows (slot by slot; padded slots add exactly nothing). Writes the new positions and |g|^2 per lane
+/// (GradientOnly: the gradient of G at the iterate instead of the new position, as solve_vertex<true>).
 /// Sources: SliceSource below (a colour's slice, neighbours gathered) and GridSource (vbd_grid.hpp: a grid cloth in
 /// colour sub-grids, neighbours loaded contiguously). The operations and their order are those of the scalar
 /// solve_vertex (vbd.hpp), so every source gives its bits.
-template <class Src>
+template <bool GradientOnly = false, class Src>
 inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x, simd::fbatch& out_y,
                         simd::fbatch& out_z, simd::fbatch& out_g2) noexcept {
     using simd::fbatch;
@@ -163,6 +164,13 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
     gx = gx + sgx;
     gy = gy + sgy;
     gz = gz + sgz;
+    if constexpr (GradientOnly) { // the gradient of G at the iterate (solve_vertex<true>), no step
+        out_x = gx;
+        out_y = gy;
+        out_z = gz;
+        out_g2 = gx * gx + gy * gy + gz * gz;
+        return;
+    }
     const fbatch c00 = hyy * hzz - hyz * hyz, c01 = hxz * hyz - hxy * hzz, c02 = hxy * hyz - hxz * hyy;
     const fbatch c11 = hxx * hzz - hxz * hxz, c12 = hxy * hxz - hxx * hyz, c22 = hxx * hyy - hxy * hxy;
     const fbatch det = hxx * c00 + hxy * c01 + hxz * c02;
