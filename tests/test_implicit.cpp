@@ -1059,23 +1059,27 @@ TEST(Implicit, CoarseLevelsRunNoCostlierSweepsThanTheNextFinerOne) {
     EXPECT_EQ(plan[1].sweeps, 10u) << "a free cloth's first level: the cloth's sweeps";
     for (std::size_t l = 2; l < plan.size(); ++l) {
         SCOPED_TRACE(l);
-        const std::uint32_t finer = l == 2 ? 20u : plan[l - 1].sweeps; // the first level at twice the cloth's
+        const std::uint32_t finer = plan[l - 1].sweeps; // a free cloth's levels all at half: doubling from the first
         EXPECT_LT(plan[l].particles, plan[l - 1].particles);
         EXPECT_GT(plan[l].sweeps, finer);
         EXPECT_LE(plan[l].sweeps, 2 * finer);
         // Rounded sweeps: within one sweep of the finer level's cost.
         EXPECT_LE(double(plan[l].particles + 150) * (plan[l].sweeps - 1), double(plan[l - 1].particles + 150) * finer);
     }
-    EXPECT_LT(plan.back().sweeps, 10u << (plan.size() - 1)) << "the smallest level is costed by its sweeps";
+    EXPECT_LT(plan.back().sweeps, 10u << (plan.size() - 2)) << "the smallest level is costed by its sweeps";
     SimulationParams p = sim.params();
-    // The first level runs twice the cloth's sweeps with a collider, with self-collision, and at 120 sweeps.
+    // Every level runs twice a free cloth's sweeps with a collider, with self-collision, and at 120 sweeps.
     const std::vector<ImplicitLevelPlan> free_plan = plan;
     auto first_level = [&](const SimulationParams& q) {
         sim.set_params(q);
         sim.step(1);
         const std::vector<ImplicitLevelPlan> now = sim.implicit_level_plan();
-        if (q.implicit.iterations == 10) { // the later levels as on the free cloth
-            for (std::size_t l = 2; l < now.size(); ++l) EXPECT_EQ(now[l].sweeps, free_plan[l].sweeps) << l;
+        if (q.implicit.iterations == 10) { // the later levels at the free cloth's, or twice them (within rounding)
+            const std::uint32_t times = now.at(1).sweeps == 10u ? 1u : 2u;
+            for (std::size_t l = 2; l < now.size(); ++l) {
+                EXPECT_GE(now[l].sweeps + 1, times * free_plan[l].sweeps) << l;
+                EXPECT_LE(now[l].sweeps, times * free_plan[l].sweeps + 1) << l;
+            }
         }
         return now.at(1).sweeps;
     };

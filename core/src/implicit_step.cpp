@@ -59,7 +59,7 @@ constexpr std::uint32_t coarse_iterations_max = 240;
 /// strain at 2 s rose from 0.0950 to 0.1001, over the 0.10 bound.
 constexpr double sweep_floor_particles = 150.0;
 
-/// Whether the first coarse level runs the cloth's k sweeps instead of 2k: on a cloth that touches nothing (no
+/// Whether the coarse levels run half their sweeps (the first the cloth's k instead of 2k): on a cloth that touches nothing (no
 /// collider, no self-collision) in a step of fewer than coarse_iterations_max / 2 sweeps. That level's sweeps cost
 /// half the cloth's at 2k and a quarter at k: the wool hang at 10 sweeps with the strain limit at 0.095 ran 1.06x
 /// (N = 100), 1.14x (N = 316) and 1.06-1.07x (N = 1000) faster (paired whole-process wall 0.91 and 0.94 at N = 100 and
@@ -71,12 +71,18 @@ bool free_first_level(const SimulationParams& p) noexcept {
     return p.colliders.empty() && p.self_collision.thickness == 0.0f && 2 * p.implicit.iterations < coarse_iterations_max;
 }
 
-/// Coarse level `level`'s sweeps per step (0: the finest coarse level): the cloth's k times its sweep factor, at most
-/// coarse_iterations_max (or 2k); the first level of a free cloth half that (free_first_level). The plan
-/// (implicit_level_plan) and the step (multilevel_guess) both ask here.
-std::uint32_t coarse_sweeps(const SimulationParams& p, double sweep_factor, std::size_t level) noexcept {
+/// A coarse level's sweeps per step: the cloth's k times its sweep factor, at most coarse_iterations_max (or 2k);
+/// every level of a free cloth half that (free_first_level; until 2026-11-30 only the first: at 10 sweeps the levels
+/// of N = 316 ran 10, 40, 80, 160, 237, 240, now 10, 20, 40, 80, 119, 142). The coarse levels cost as much as the
+/// cloth's own sweeps (stage timers, N = 316: 16.3 of a 32.3 ms step, the serial 40 x 40 .. 5 x 5 levels 6.7 ms of
+/// it), and their second half bought little: one step's energy error after 10 sweeps 6.89e-3 -> 7.44e-3 (N = 316)
+/// and 2.14e-2 -> 2.56e-2 (N = 100), the strain over a 2 s hang without the limit 0.637 -> 0.641 and 0.314 -> 0.320,
+/// real time with the limit 0.97-1.01x -> 1.12-1.20x (N = 316) and 7.8-8.6x -> 9.7-10.0x (N = 100)
+/// (docs/implicit.md, "Half the coarse sweeps on a free cloth"). The plan (implicit_level_plan) and the step
+/// (multilevel_guess) both ask here.
+std::uint32_t coarse_sweeps(const SimulationParams& p, double sweep_factor) noexcept {
     const std::uint32_t k = p.implicit.iterations;
-    const double factor = level == 0 && free_first_level(p) ? 0.5 * sweep_factor : sweep_factor;
+    const double factor = free_first_level(p) ? 0.5 * sweep_factor : sweep_factor;
     return std::min<std::uint32_t>(std::max(coarse_iterations_max, 2 * k),
                                    static_cast<std::uint32_t>(std::lround(k * factor)));
 }
@@ -125,7 +131,7 @@ std::vector<ImplicitLevelPlan> Simulation::implicit_level_plan() const {
     if (params_.implicit.multilevel)
         for (std::size_t l = 0; l < implicit_->coarse.size(); ++l) {
             const CoarseLevel& L = implicit_->coarse[l];
-            plan.push_back({L.cloth.particle_count, coarse_sweeps(params_, L.sweep_factor, l)});
+            plan.push_back({L.cloth.particle_count, coarse_sweeps(params_, L.sweep_factor)});
         }
     return plan;
 }
@@ -410,7 +416,7 @@ template <bool Parallel> bool Simulation::multilevel_guess() {
         // The level's sweeps: the cloth's times L.sweep_factor (cook_implicit), at most coarse_iterations_max; the
         // first level of a free cloth half that (free_first_level).
         ImplicitParams level_params = params_.implicit;
-        level_params.iterations = coarse_sweeps(params_, L.sweep_factor, l);
+        level_params.iterations = coarse_sweeps(params_, L.sweep_factor);
         L.solver.run<Parallel>({L.x0.data(), L.y0.data(), L.z0.data(), L.x.data(), L.y.data(), L.z.data(),
                                 L.inv_mass.data(), params_.colliders},
                                level_params, h, params_.air_drag);
