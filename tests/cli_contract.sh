@@ -4,6 +4,7 @@
 set -uo pipefail
 DRAPE=${DRAPE:?set DRAPE to the drape executable}
 fail=0
+repo=$(cd "$(dirname "$0")/.." && pwd)
 err=$(mktemp)
 out=$(mktemp)
 log=$(mktemp)
@@ -65,10 +66,14 @@ expect_exit 4 "applied only every 100 substeps, its corrections too large for th
     run --scene hang --size 30 --strain-limit 0.01 --strain-every 100 --sim-seconds 1
 expect_error "this scene has colliders; drop --fas-at-rest" run --scene sphere --solver implicit --fas-at-rest --steps 1
 expect_error "--fas already runs it on every step" run --solver implicit --fas --fas-at-rest --steps 1
-# Panels sewn across a gap with no sewing speed would snap shut and fling the cloth (found: 1.0e4 m/s, "healthy").
+# Panels sewn across a gap with sewing off would snap shut and fling the cloth (found: 1.0e4 m/s, "healthy"); so
+# would a seam open by a fraction of a millimetre (the bag's 5 mm: 182 m/s). Refused; without the field they are sewn.
 echo '{"cloth": {"type": "outline", "outline": [[0, 0], [1, 0], [1, 1], [0, 1]], "spacing": 0.05,
-                 "copy": {"gap": 0.3, "sew": [[0, 3], [3, 0]]}}, "material": "cotton_shirting"}' >"$tmpdir/snap.json"
+                 "copy": {"gap": 0.3, "sew": [[0, 3], [3, 0]]}}, "material": "cotton_shirting",
+       "physics": {"sewing_speed": 0}}' >"$tmpdir/snap.json"
 expect_error "set a sewing speed (physics.sewing_speed, allowed (0, 10] m/s" run --scene "$tmpdir/snap.json" --steps 1
+sed 's/"sewing_speed": 0.5,/"sewing_speed": 0,/' "$repo/scenes/examples/bag.json" >"$tmpdir/bag_unsewn.json"
+expect_error "a seam is 0.005 m open (particles 0 and 666) and the sewing speed is 0" run --scene "$tmpdir/bag_unsewn.json" --steps 1
 expect_error "does not exist" run --scene "$tmpdir/missing.json"
 expect_error "--every" run --every 5
 expect_error "--size: '3.5' must be a whole number in [2, 4096]" run --size 3.5
@@ -285,7 +290,6 @@ rm -f "$out.own"
 expect_error "--size: value 5 is outside the allowed range [10, 1000] (cells per metre of the outline" run --scene "$tmpdir/tri.json" --size 5
 
 # Mask cloths (cloth.type "mask"): the example runs; broken files each give their one-line error, exit 2.
-repo=$(cd "$(dirname "$0")/.." && pwd)
 "$DRAPE" run --scene "$repo/scenes/examples/tank_top.json" --steps 20 --json >"$out" 2>"$err" || { echo "FAIL: tank_top run"; cat "$err"; fail=1; }
 python3 -c "import json; j=json.load(open('$out')); assert j['cloth']=='mask' and j['panels']==2 and j['particles']==1450 and j['seam_springs']==62 and j['finite'], j; print('ok: tank_top.json ->', j['particles'], 'particles,', j['seam_springs'], 'seam springs')" || fail=1
 expect_error "--size: the scene's cloth is made of masks" run --scene "$repo/scenes/examples/tank_top.json" --size 50
@@ -360,7 +364,6 @@ expect_error "--overwrite" run --steps 1 --overwrite
 
 # A mesh cloth from an OBJ file (scenes/examples/mesh_disc.json -> tests/data/disc.obj, 469 vertices) runs and exports
 # (0.1 s: 2,268 steps, 24 frames; 0.5 s took 48 s under ASan).
-repo=$(cd "$(dirname "$0")/.." && pwd)
 if ! "$DRAPE" run --scene "$repo/scenes/examples/mesh_disc.json" --sim-seconds 0.1 --export-obj "$tmpdir/mesh" \
         --json >"$out" 2>"$err" || [ -s "$err" ]; then
     echo "FAIL: mesh_disc run"; cat "$err"; fail=1
@@ -437,6 +440,13 @@ check_health() { # check_health "python condition on j" args...
 }
 check_health "j['healthy'] and j['strain_limit_honoured'] and j['strain_limit_max_stretch'] <= 0.011 and j['kinetic_energy'] < 1 and j['health']['energy_bound'] > 0" \
     --size 32 --material springs --stiffness 100 --strain-limit 0.01 --sim-seconds 0.5
+# Seams that start open are sewn by default (0.5 m/s): the bag without its sewing_speed field (seams 5 mm open) and
+# the square sewn to its copy across 0.3 m move gently from the first substep (snapped: 182 m/s and 1.0e4 m/s).
+sed 's/"sewing_speed": 0.5,//' "$repo/scenes/examples/bag.json" >"$tmpdir/bag_default.json"
+check_health "j['healthy'] and j['max_speed'] < 1" --scene "$tmpdir/bag_default.json" --steps 1
+echo '{"cloth": {"type": "outline", "outline": [[0, 0], [1, 0], [1, 1], [0, 1]], "spacing": 0.05,
+                 "copy": {"gap": 0.3, "sew": [[0, 3], [3, 0]]}}, "material": "cotton_shirting"}' >"$tmpdir/snap_default.json"
+check_health "j['healthy'] and j['max_speed'] < 1" --scene "$tmpdir/snap_default.json" --sim-seconds 0.2
 cat >"$tmpdir/overlap.json" <<'JSON'
 { "cloth": {"type": "grid", "n": 20, "size": 1.0, "plane": "horizontal", "centre": [0, 0, 0], "pins": "none"},
   "material": {"damping_ratio": 0}, "physics": {"drag": 0},

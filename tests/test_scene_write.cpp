@@ -235,6 +235,13 @@ TEST(SceneWrite, EveryFieldIsWrittenExplicitly) {
     SceneSpec with_dt = load_scene("hang");
     with_dt.dt = 1.25e-5f;
     EXPECT_TRUE(has(scene_to_json(with_dt), "\"dt\": 1.25e-05"));
+    // Sewing is on by default (0.5 m/s): only another speed is written, and sewing off (0) is, so it stays off.
+    EXPECT_FALSE(has(text, "\"sewing_speed\"")) << text;
+    SceneSpec unsewn = load_scene("hang");
+    unsewn.physics.sewing_speed = 0.0f;
+    const std::string off = scene_to_json(unsewn);
+    EXPECT_TRUE(has(off, "\"sewing_speed\": 0")) << off;
+    EXPECT_EQ(parse_scene(off, "unsewn.json").physics.sewing_speed, 0.0f);
 }
 
 TEST(SceneWrite, ImplicitSolverRoundTrips) {

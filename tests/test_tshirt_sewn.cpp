@@ -105,6 +105,55 @@ TEST(TShirtSewn, SewingClosesTheSeamsGentlyAndSnappingWideSeamsIsRefused) {
     }
 }
 
+// Every seam that starts open is sewn by default, however narrow the gap: snapped shut, a seam a few millimetres
+// open flings its particles at gap / dt (the canvas bag's 5 mm: 182 m/s in the first substep); one that starts short
+// of its rest length is let out the same way. With sewing off (speed 0) a seam must start at its rest length, to
+// within SimulationParams::unsewn_gap_ratio of the spacing; such seams run.
+TEST(TShirtSewn, SeamsOffTheirRestLengthAreSewnByDefaultAndRefusedUnsewn) {
+    // A 1 m square of cotton shirting (5 cm spacing) sewn to its copy along two sides; its seams' rest length is half
+    // the spacing (copy.seam_rest_ratio 0.5), so a gap of 0.025 m is closed and 0.028 m is 3 mm open.
+    auto square = [](double gap, const char* physics) {
+        char text[512];
+        std::snprintf(text, sizeof text,
+                      R"({"cloth": {"type": "outline", "outline": [[0, 0], [1, 0], [1, 1], [0, 1]], "spacing": 0.05,
+                          "copy": {"gap": %g, "sew": [[0, 3], [3, 0]]}}, "material": "cotton_shirting"%s})",
+                      gap, physics);
+        return build_scene(parse_scene(text, "square.json"));
+    };
+    auto fastest_after_one_substep = [](BuiltScene b) {
+        Simulation sim(std::move(b.cloth), b.initial, b.params);
+        sim.step(1);
+        return sim.health().max_speed;
+    };
+    EXPECT_EQ(SimulationParams{}.sewing_speed, 0.5f);
+    const float sewn = fastest_after_one_substep(square(0.028, ""));
+    std::printf("seams 3 mm open: fastest particle after one substep %.3g m/s, sewn by default\n", sewn);
+    EXPECT_LT(sewn, 1.0f) << "a seam 3 mm open was snapped shut instead of sewn";
+    try {
+        fastest_after_one_substep(square(0.028, R"(, "physics": {"sewing_speed": 0})"));
+        ADD_FAILURE() << "seams 3 mm open accepted with sewing off";
+    } catch (const InvalidInput& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("a seam is 0.003 m open"), std::string::npos) << what;
+        EXPECT_NE(what.find("sewing speed is 0"), std::string::npos) << what;
+        EXPECT_NE(what.find("leave it out for the default 0.5"), std::string::npos) << what;
+    }
+    // Panels placed closer than the seams' rest length (0.01 m: 15 mm short) were pushed apart at 110 m/s in the first
+    // substep; the seams are let out to their rest length at the sewing speed instead.
+    const float let_out = fastest_after_one_substep(square(0.01, ""));
+    std::printf("seams 15 mm short: fastest particle after one substep %.3g m/s, let out by default\n", let_out);
+    EXPECT_LT(let_out, 1.0f) << "a seam 15 mm short of its rest length pushed the panels apart at once";
+    try {
+        fastest_after_one_substep(square(0.01, R"(, "physics": {"sewing_speed": 0})"));
+        ADD_FAILURE() << "seams 15 mm short accepted with sewing off";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("a seam is 0.015 m shorter than its rest length"), std::string::npos)
+            << e.what();
+    }
+    const float closed = fastest_after_one_substep(square(0.025, R"(, "physics": {"sewing_speed": 0})"));
+    EXPECT_LT(closed, 0.01f) << "closed seams with sewing off moved the cloth";
+}
+
 // The schedule itself: a seam's current rest length is its start length minus speed x t, down to its rest; the
 // health figures measure a seam against it (a seam on schedule is not "stretched").
 TEST(TShirtSewn, SeamRestFollowsTheScheduleAndBadSpeedsAreRefused) {

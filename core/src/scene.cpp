@@ -1071,7 +1071,8 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
     SimulationParams& p = s.physics;
     p.gravity = ph.vec3("gravity", 100.0, " m/s^2", p.gravity);
     p.air_drag = static_cast<float>(ph.number("drag", 0.0, 100.0, " 1/s", p.air_drag));
-    p.sewing_speed = static_cast<float>(ph.number("sewing_speed", 0.0, 10.0, " m/s (0 = off)", p.sewing_speed));
+    p.sewing_speed = static_cast<float>(
+        ph.number("sewing_speed", 0.0, 10.0, " m/s (0 = off: every seam must then start closed)", p.sewing_speed));
     p.integrator = ph.text("integrator", {"euler", "verlet"}, "euler") == "verlet" ? Integrator::verlet
                                                                                  : Integrator::symplectic_euler;
     p.solver = ph.text("solver", {"explicit", "implicit"}, "explicit") == "implicit" ? Solver::implicit

@@ -309,7 +309,7 @@ std::string to_json(const SceneSpec& s, const SceneState* state, const std::file
         .add("integrator", str(p.integrator == Integrator::verlet ? "verlet" : "euler"))
         .add("solver", str(solver_name(p.solver)));
     if (s.dt) ph.add("dt", num(*s.dt));
-    if (p.sewing_speed > 0.0f) ph.add("sewing_speed", num(p.sewing_speed));
+    if (p.sewing_speed != SimulationParams{}.sewing_speed) ph.add("sewing_speed", num(p.sewing_speed)); // 0: off
     Fields im;
     im.add("iterations", num(p.implicit.iterations)).add("tolerance", num(p.implicit.tolerance))
         .add("chebyshev_rho", num(p.implicit.chebyshev_rho))

@@ -1,6 +1,7 @@
-// Sewing (SimulationParams::sewing_speed): seams that start open are pulled shut at a set speed. Each seam's rest
-// length starts at its length in the initial state (or a saved state's InitialState::seam_rest) and shrinks by
-// speed x dt every step to its own rest length (Edge::rest):  l0_k <- max(rest_k, l0_k - speed dt).
+// Sewing (SimulationParams::sewing_speed, on by default): seams that start open are pulled shut at a set speed, and
+// seams that start shorter than their rest length are let out to it the same way. Each seam's rest length starts at
+// its length in the initial state (or a saved state's InitialState::seam_rest) and moves by speed x dt every step to
+// its own rest length (Edge::rest):  l0_k <- max(rest_k, l0_k - speed dt)  (or min(rest_k, l0_k + speed dt)).
 // The seam spring then pulls only by what the cloth lags behind the schedule, so the panels are drawn together
 // smoothly instead of snapping shut in one substep. Every consumer of a seam's rest length reads the current one:
 // seam_forces (seam_rest_), strain limiting (its copy, limit_rest_), the implicit solver (vbd::Solver::set_spring_rest)
@@ -20,19 +21,25 @@ namespace drape {
 // Without sewing a seam is at its rest length from the start. One that starts open (two panels placed apart) then
 // closes in a step or two, and its stretch energy flings the cloth: two canvas panels sewn across a 0.3 m gap reached
 // 3,960 m/s and a structural strain of 12.7 in 1 s, within the health monitor's bounds, which include the energy the
-// start holds. So a seam more than seam_snap_ratio times the cloth's spacing (cloth_spacing: its mean structural spring) longer than its rest length (its own
-// without sewing, also when sewing is switched off mid-run; a saved state's seam_rest with sewing) is refused, with
-// the remedy; so is a saved seam_rest that long beyond its seam (it would push the panels apart: 100 m was taken).
+// start holds, and the canvas bag's seams, 5 mm open, flung its particles at 182 m/s in the first substep. So with
+// sewing off (speed 0: at the start, or switched off while a seam is still closing) a seam more than unsewn_gap_ratio
+// times the cloth's spacing (cloth_spacing: its mean structural spring) longer than its rest length is refused, with
+// the remedy; so is a saved seam_rest more than saved_seam_rest_ratio times the spacing from its seam's length (the
+// cloth lags its schedule by millimetres; shorter would snap the seam shut, longer push the panels apart: 100 m was
+// taken).
 void Simulation::refuse_seams_off_schedule(const float* x, const float* y, const float* z,
                                            std::span<const float> saved_rest) const {
     const SeamSet& s = cloth_.seams;
-    const double limit = double(SimulationParams::seam_snap_ratio) * cloth_spacing(cloth_);
+    const double spacing = cloth_spacing(cloth_);
+    const double ratio = saved_rest.empty() ? double(SimulationParams::unsewn_gap_ratio)
+                                            : double(SimulationParams::saved_seam_rest_ratio);
+    const double limit = ratio * spacing;
     double worst = 0.0;
     std::size_t at = 0;
     for (std::size_t k = 0; k < s.a.size(); ++k) {
         const double dx = double(x[s.b[k]]) - x[s.a[k]], dy = double(y[s.b[k]]) - y[s.a[k]],
                      dz = double(z[s.b[k]]) - z[s.a[k]];
-        const double rest = saved_rest.empty() ? double(s.rest[k]) : std::max(double(s.rest[k]), double(saved_rest[k]));
+        const double rest = saved_rest.empty() ? double(s.rest[k]) : double(saved_rest[k]);
         const double off = std::sqrt(dx * dx + dy * dy + dz * dz) - rest; // > 0: open, < 0: pushed apart
         if (std::fabs(off) > std::fabs(worst)) {
             worst = off;
@@ -40,23 +47,32 @@ void Simulation::refuse_seams_off_schedule(const float* x, const float* y, const
         }
     }
     if (!(std::fabs(worst) > limit)) return;
-    char text[640];
-    if (saved_rest.empty())
-        std::snprintf(text, sizeof text,
-                      "a seam starts %.3g m open (particles %u and %u) and the sewing speed is 0, so it would snap shut "
-                      "in one step and fling the cloth; set a sewing speed (physics.sewing_speed, allowed (0, 10] m/s; "
-                      "the built-in T-shirt sews at 0.5) to draw the seams shut, or place the panels closer: without "
-                      "sewing a seam may start at most %.3g m open (%g x the cloth's spacing)",
-                      worst, unsigned(s.a[at]), unsigned(s.b[at]), limit, double(SimulationParams::seam_snap_ratio));
-    else
+    char text[720];
+    if (saved_rest.empty()) {
+        if (worst > 0.0)
+            std::snprintf(text, sizeof text,
+                          "a seam is %.3g m open (particles %u and %u) and the sewing speed is 0, so it would snap "
+                          "shut in one step and fling the cloth; set a sewing speed (physics.sewing_speed, allowed "
+                          "(0, 10] m/s; leave it out for the default 0.5) to draw the seams shut, or place the panels "
+                          "closer: without sewing a seam may be at most %.3g m open (%g x the cloth's spacing)",
+                          worst, unsigned(s.a[at]), unsigned(s.b[at]), limit, ratio);
+        else
+            std::snprintf(text, sizeof text,
+                          "a seam is %.3g m shorter than its rest length (particles %u and %u) and the sewing speed is "
+                          "0, so it would push the panels apart in one step and fling the cloth; set a sewing speed "
+                          "(physics.sewing_speed, allowed (0, 10] m/s; leave it out for the default 0.5) to let the "
+                          "seams out, or place the panels at the seams' rest length: without sewing a seam may be at "
+                          "most %.3g m shorter than its rest (%g x the cloth's spacing)",
+                          -worst, unsigned(s.a[at]), unsigned(s.b[at]), limit, ratio);
+    } else {
         std::snprintf(text, sizeof text,
                       "initial state seam_rest[%zu] = %.4g m is %.3g m %s than that seam (particles %u and %u), so it "
                       "would %s; a saved seam's current rest length lies within %.3g m (%g x the cloth's spacing) of "
                       "its length (state.seam_rest in scene files; leave it out to start sewing from the positions)",
                       at, double(saved_rest[at]), std::fabs(worst), worst > 0.0 ? "shorter" : "longer",
                       unsigned(s.a[at]), unsigned(s.b[at]),
-                      worst > 0.0 ? "snap shut and fling the cloth" : "push the panels apart", limit,
-                      double(SimulationParams::seam_snap_ratio));
+                      worst > 0.0 ? "snap shut and fling the cloth" : "push the panels apart", limit, ratio);
+    }
     throw InvalidInput(text);
 }
 
@@ -85,8 +101,10 @@ void Simulation::cook_sewing(const InitialState& initial) {
                          dz = double(initial.z[s.b[k]]) - initial.z[s.a[k]];
             start = static_cast<float>(std::sqrt(dx * dx + dy * dy + dz * dz));
         }
-        seam_rest_[k] = std::max(s.rest[k], start);
-        sewing_ = sewing_ || seam_rest_[k] > s.rest[k];
+        // A seam that starts shorter than its rest (panels placed closer than it) is let out to it the same way; its
+        // schedule starts at least 1 % of its rest length from zero (a current rest of 0 has no strain).
+        seam_rest_[k] = std::max(start, 0.01f * s.rest[k]);
+        sewing_ = sewing_ || seam_rest_[k] != s.rest[k];
     }
     edge_rest_.resize(cloth_.edges.size());
     for (std::size_t e = 0; e < cloth_.edges.size(); ++e) edge_rest_[e] = cloth_.edges[e].rest;
@@ -102,8 +120,9 @@ void Simulation::update_sewing() {
                                                       : std::numeric_limits<float>::infinity();
     bool open = false;
     for (std::size_t k = 0; k < s.a.size(); ++k) {
-        const float rest = std::max(s.rest[k], seam_rest_[k] - closing);
-        open = open || rest > s.rest[k];
+        const float target = s.rest[k], now = seam_rest_[k];
+        const float rest = now > target ? std::max(target, now - closing) : std::min(target, now + closing);
+        open = open || rest != target;
         seam_rest_[k] = rest;
         edge_rest_[s.groups.edge_index[k]] = rest;
     }

@@ -68,7 +68,7 @@ void validate_params(const SimulationParams& p) {
         check(std::isfinite(p.aero.velocity[k]) && std::fabs(p.aero.velocity[k]) <= 100.0f,
               "aero velocity[" + std::to_string(k) + "]", p.aero.velocity[k], "[-100, 100] m/s");
     check(std::isfinite(p.sewing_speed) && p.sewing_speed >= 0.0f && p.sewing_speed <= 10.0f, "sewing speed",
-          p.sewing_speed, "[0, 10] m/s (0 = off)");
+          p.sewing_speed, "[0, 10] m/s (0 = off: every seam must then start closed)");
     check(p.strain_limit.every >= 1 && p.strain_limit.every <= 1000, "strain limit interval", p.strain_limit.every,
           "[1, 1000] substeps");
     if (p.solver == Solver::implicit) {

@@ -114,17 +114,24 @@ struct SimulationParams {
     bool fused = true; ///< false runs each stage as its own pass (reference / per-stage profiling)
     StrainLimit strain_limit;
     /// Sewing, m/s (0..10; 0 = off): seams (SpringKind::seam) that start longer than their rest length are pulled
-    /// shut at this speed instead of all at once. A seam's rest length starts at its length in the initial state
-    /// and shrinks by sewing_speed x dt each step to its own rest length (Edge::rest); seam forces, strain limiting, the
+    /// shut at this speed instead of all at once (and seams that start shorter are let out to it). A seam's rest
+    /// length starts at its length in the initial state and moves by sewing_speed x dt each step to its own rest
+    /// length (Edge::rest); seam forces, strain limiting, the
     /// implicit solver and the health figures all use that current rest length. While a seam is still closing the
-    /// cloth feels no gravity: the garment is sewn where it was placed (around a body), then dropped onto it. Off,
-    /// a seam 26 cm open snaps shut in one substep (its spring, or strain limiting, pulls the edges together at
-    /// once), which flings the panels.
-    float sewing_speed = 0.0f;
+    /// cloth feels no gravity: the garment is sewn where it was placed (around a body), then dropped onto it. On by
+    /// default (0.5 m/s, the T-shirt's), so every seam that starts open is sewn: snapped shut, even a seam 5 mm open
+    /// on a canvas bag flung its particles at 182 m/s in the first substep. Off (0), every seam must start closed
+    /// (within unsewn_gap_ratio of the cloth's spacing; Simulation refuses the cloth otherwise).
+    float sewing_speed = 0.5f;
     /// Without sewing, a seam may start at most this many times the cloth's spacing (cloth_spacing: its mean
-    /// structural spring) longer than its rest length (Simulation refuses the cloth otherwise: it would snap shut and
-    /// fling the panels; a saved seam_rest, too, lies within that of its seam's length).
-    static constexpr float seam_snap_ratio = 1.5f;
+    /// structural spring) longer than its rest length: it snaps shut in the first substep (strain limiting or the seam
+    /// spring close it at once), so its particles move at about gap / dt. On the canvas bag (2 cm spacing, explicit
+    /// dt 3.3e-5 s) a gap of 0.1 / 0.2 / 5 mm flung them at 3.7 / 7.3 / 182 m/s; at this bound, 0.02 mm, 0.7 m/s.
+    static constexpr float unsewn_gap_ratio = 0.001f;
+    /// A saved state's seam_rest (sewing in progress) lies within this many times the cloth's spacing of its seam's
+    /// length: the cloth lags its schedule by a few millimetres; shorter would snap the seam shut, longer push the
+    /// panels apart (a saved seam_rest of 100 m was taken before this check).
+    static constexpr float saved_seam_rest_ratio = 1.5f;
     /// Analytic colliders, positions relative to Cloth::origin; applied in order after strain limiting.
     std::vector<Collider> colliders;
     SelfCollision self_collision; ///< off by default (thickness 0)
