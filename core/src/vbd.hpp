@@ -147,6 +147,22 @@ struct SweepArgs {
 /// (scenes/examples/far_from_origin.json) dropped every step at h = 1/30 s and never moved.
 inline constexpr int vbd_line_search_halvings = 20;
 
+/// Spring damping's Hessian blocks q n n^T summed from zero, for one vertex (T = float: solve_vertex) or one per lane
+/// (T = simd::fbatch: vbd_batch.hpp's solve_lanes, and a grid cloth's per-step cook, GridLayout::cook_damping): one
+/// definition, so the scalar reference and the SIMD sweeps do the same operations in the same order.
+template <class T> struct DampingHessian {
+    T xx = T(0.0f), yy = xx, zz = xx, xy = xx, xz = xx, yz = xx;
+    void add(T q, T nx, T ny, T nz) noexcept {
+        const T qx = q * nx, qy = q * ny;
+        xx = simd::fma(qx, nx, xx);
+        yy = simd::fma(qy, ny, yy);
+        zz = simd::fma(q * nz, nz, zz);
+        xy = simd::fma(qx, ny, xy);
+        xz = simd::fma(qx, nz, xz);
+        yz = simd::fma(qy, nz, yz);
+    }
+};
+
 /// The local Newton step of vertex i (movable): writes the new position and returns |g_i|^2 (N^2). GradientOnly:
 /// writes g_i (the gradient of G at the iterate, N) instead and takes no step.
 template <bool GradientOnly = false>
@@ -165,8 +181,8 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
     // The terms quadratic in x_i (inertia, drag, damping, bending) are tracked apart from the springs' stretch:
     // G restricted to x_i is then exactly qg . d + 1/2 d^T QH d + sum of the springs' stretch energies, which the
     // line search below evaluates. qh_* hold the quadratic terms' Hessian; dh_* the springs' damping part of it,
-    // summed from zero (the SIMD grid sweeps read it cooked once per step: vbd_batch.hpp damping_q).
-    float dhxx = 0.0f, dhyy = 0.0f, dhzz = 0.0f, dhxy = 0.0f, dhxz = 0.0f, dhyz = 0.0f;
+    // summed from zero (DampingHessian; the SIMD grid sweeps read it cooked once per step: vbd_batch.hpp damping_q).
+    DampingHessian<float> dh;
     float sgx = 0.0f, sgy = 0.0f, sgz = 0.0f; // the springs' stretch gradient
     // Springs: E = k/2 (L - l)^2, grad_i = -k (L - l) u (u from i to j); projected Hessian k (c I + (1 - c) u u^T),
     // c = max(0, 1 - l/L). Damping along n, the direction at the start of the step: grad_i = -(kd/h) (dd . n) n,
@@ -201,19 +217,13 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
         const float n2 = std::fma(nz, nz, std::fma(ny, ny, nx * nx));
         const bool damped = kd > 0.0f && n2 > 1e-24f;
         const float q = damped ? kd / n2 : 0.0f; // kd / |n|^2
-        const float qx = q * nx, qy = q * ny;
-        dhxx = std::fma(qx, nx, dhxx);
-        dhyy = std::fma(qy, ny, dhyy);
-        dhzz = std::fma(q * nz, nz, dhzz);
-        dhxy = std::fma(qx, ny, dhxy);
-        dhxz = std::fma(qx, nz, dhxz);
-        dhyz = std::fma(qy, nz, dhyz);
+        dh.add(q, nx, ny, nz);
         const float p = q * std::fma(dz - nz, nz, std::fma(dy - ny, ny, (dx - nx) * nx));
         gx = std::fma(-p, nx, gx);
         gy = std::fma(-p, ny, gy);
         gz = std::fma(-p, nz, gz);
     }
-    float qhxx = base + dhxx, qhyy = base + dhyy, qhzz = base + dhzz, qhxy = dhxy, qhxz = dhxz, qhyz = dhyz;
+    float qhxx = base + dh.xx, qhyy = base + dh.yy, qhzz = base + dh.zz, qhxy = dh.xy, qhxz = dh.xz, qhyz = dh.yz;
     // Bending: grad_i = sum_j Q_ij [(x_j - x_i) + beta/h ((x_j - x_j^n) - (x_i - x_i^n))] (rows of Q sum to 0),
     // Hessian Q_ii (1 + beta/h) I.
     if (!g.bend_diag.empty()) {

@@ -26,7 +26,7 @@ struct VbdSlices {
 };
 
 /// Spring damping's coefficient q = (kd / h) / |n|^2 of one slot (0 where kd = 0 or n, the spring at the start of the
-/// step, has no length), and its Hessian block q n n^T added to an accumulator: both depend only on the state at the
+/// step, has no length), and its Hessian block q n n^T added to an accumulator (DampingHessian, vbd.hpp): both depend only on the state at the
 /// start of the step, so a grid cloth computes them once per step (GridLayout::cook_damping) and its sweeps read
 /// them; the other sources compute them in the sweep with these same operations (the same bits).
 inline simd::fbatch damping_q(simd::fbatch kd, simd::fbatch inv_h, simd::fbatch nx, simd::fbatch ny,
@@ -36,19 +36,6 @@ inline simd::fbatch damping_q(simd::fbatch kd, simd::fbatch inv_h, simd::fbatch 
     const simd::fmask damped = (k > zero) & (n2 > simd::fbatch(1e-24f));
     return simd::select(damped, k / simd::select(damped, n2, one), zero);
 }
-struct DampingHessian {
-    simd::fbatch xx = simd::fbatch(0.0f), yy = xx, zz = xx, xy = xx, xz = xx, yz = xx;
-    void add(simd::fbatch q, simd::fbatch nx, simd::fbatch ny, simd::fbatch nz) noexcept {
-        const simd::fbatch qx = q * nx, qy = q * ny;
-        xx = simd::fma(qx, nx, xx);
-        yy = simd::fma(qy, ny, yy);
-        zz = simd::fma(q * nz, nz, zz);
-        xy = simd::fma(qx, ny, xy);
-        xz = simd::fma(qx, nz, xz);
-        yz = simd::fma(qy, nz, yz);
-    }
-};
-
 /// The local step of simd::width vertices at once, one per lane, from a source of their state and their springs and
 /// bending rows (slot by slot; padded slots add exactly nothing). Writes the new positions and |g|^2 per lane
 /// (GradientOnly: the gradient of G at the iterate instead of the new position, as solve_vertex<true>).
@@ -75,7 +62,7 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
     fbatch gz = simd::fma(mi, zi - src.own(a.pz), md * dzi);
     const fbatch base = mi + md;
     fbatch hxx = base, hyy = hxx, hzz = hxx, hxy = zero, hxz = zero, hyz = zero;
-    DampingHessian dh; // the springs' damping, summed from zero (cooked per step by a grid source)
+    DampingHessian<simd::fbatch> dh; // the springs' damping, summed from zero (cooked per step by a grid source)
     if constexpr (Src::cooked_damping) dh = src.damping_hessian();
     fbatch sgx = zero, sgy = zero, sgz = zero;
     const fbatch inv_h(a.inv_h), tiny(1e-24f);

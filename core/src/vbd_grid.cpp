@@ -234,7 +234,7 @@ template <bool Parallel> void GridLayout::cook_damping(const SweepArgs& a) {
             const std::size_t o = class_base(cls) + b * W;
             const GridSource src{*this, o, sd, bd};
             const simd::fbatch x0i = src.own(a.x0), y0i = src.own(a.y0), z0i = src.own(a.z0);
-            DampingHessian h;
+            DampingHessian<simd::fbatch> h;
             for (std::size_t s = 0; s < slots; ++s) {
                 simd::fbatch x0j, y0j, z0j;
                 src.spring_pos(s, a.x0, a.y0, a.z0, x0j, y0j, z0j);

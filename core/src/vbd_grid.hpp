@@ -130,8 +130,8 @@ struct GridSource {
         load3(std::ptrdiff_t(o) + sd[s], x, y, z, ox, oy, oz);
     }
     simd::fbatch damping_q(std::size_t s) const noexcept { return simd::load(g.dq_.data() + g.spring_at(o, s)); }
-    DampingHessian damping_hessian() const noexcept {
-        DampingHessian h;
+    DampingHessian<simd::fbatch> damping_hessian() const noexcept {
+        DampingHessian<simd::fbatch> h;
         h.xx = simd::load(g.dh_[0].data() + o);
         h.yy = simd::load(g.dh_[1].data() + o);
         h.zz = simd::load(g.dh_[2].data() + o);

@@ -36,6 +36,8 @@ inline fbatch fma(fbatch a, fbatch b, fbatch c) noexcept {
     return xsimd::fma(a, b, c);
 #endif
 }
+/// The scalar lane of fma: std::fma, one rounding (a scalar twin written once for float and fbatch calls it).
+inline float fma(float a, float b, float c) noexcept { return std::fma(a, b, c); }
 /// c - a * b with a single rounding (same notes as fma).
 inline fbatch fnma(fbatch a, fbatch b, fbatch c) noexcept {
 #if defined(__AVX512F__)
