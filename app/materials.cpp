@@ -271,14 +271,12 @@ std::string unconverged_implicit_warning(const Simulation& sim, float max_struct
            fix;
 }
 
-std::string long_explicit_run_warning(const StabilityBound& bound, double dt, std::uint64_t substeps,
-                                      std::size_t particles) {
-    const double work = double(substeps) * double(particles);
-    if (!(work > long_explicit_run_work)) return {};
-    // At the bound w^2 dt^2 + 2 g dt = 4 (stability.cpp): the damping's share of it, 2 g dt / 4, says which sets it.
-    const double damping_share = 0.5 * bound.gamma_max * bound.dt_max;
+// At the bound w^2 dt^2 + 2 g dt = 4 (stability.cpp): the damping's share of it, 2 g dt / 4, says which sets it.
+bool damping_sets_explicit_bound(const StabilityBound& bound) { return 0.5 * bound.gamma_max * bound.dt_max > 0.5; }
+
+std::string explicit_bound_cause(const StabilityBound& bound) {
     char cause[400];
-    if (damping_share > 0.5)
+    if (damping_sets_explicit_bound(bound))
         std::snprintf(cause, sizeof cause,
                       "the damping sets that bound (damping rates up to %.3g 1/s; the stiffness alone would allow %.3g "
                       "s): a smaller material.damping (the fabric model's Rayleigh beta, s) or damping_ratio (the "
@@ -289,6 +287,14 @@ std::string long_explicit_run_warning(const StabilityBound& bound, double dt, st
                       "the stiffest spring (%.4g N/m) on the lightest particle (%.3g g) sets that bound, and it "
                       "shrinks as the cloth gets finer",
                       bound.max_stiffness, 1e3 * bound.min_mass);
+    return cause;
+}
+
+std::string long_explicit_run_warning(const StabilityBound& bound, double dt, std::uint64_t substeps,
+                                      std::size_t particles) {
+    const double work = double(substeps) * double(particles);
+    if (!(work > long_explicit_run_work)) return {};
+    const std::string cause = explicit_bound_cause(bound);
     const double minutes = work / 5e8 / 60.0;
     char duration[64];
     if (minutes < 90.0)
@@ -301,7 +307,7 @@ std::string long_explicit_run_warning(const StabilityBound& bound, double dt, st
                   "this run takes %.4g substeps of %.3g s (under the explicit stability bound, %.3g s) for %zu "
                   "particles: %.3g particle-substeps, about %s at 5e8 a second (2 cores); %s. The implicit solver "
                   "(--solver implicit) takes steps of up to 0.1 s at any stiffness and damping",
-                  double(substeps), dt, bound.dt_max, particles, work, duration, cause);
+                  double(substeps), dt, bound.dt_max, particles, work, duration, cause.c_str());
     return text;
 }
 

@@ -86,6 +86,10 @@ std::string started_inside_warning(const Simulation& sim);
 /// 32 x 32 cloth, silently.)
 std::string long_explicit_run_warning(const StabilityBound& bound, double dt, std::uint64_t substeps,
                                       std::size_t particles);
+/// What sets the explicit stability bound, in words for a message: the damping (with the rate and what the stiffness
+/// alone would allow) or the stiffest spring on the lightest particle.
+std::string explicit_bound_cause(const StabilityBound& bound);
+bool damping_sets_explicit_bound(const StabilityBound& bound);
 inline constexpr double long_explicit_run_work = 3e10;
 /// A warning (or empty) when self-collision's thickness is above half the cloth's mean spring length: every particle
 /// then lies within the thickness of its neighbours' triangles, which makes the stage slow (the 64 x 64 pile at 0.05 m:

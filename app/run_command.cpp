@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "drape/fabric.hpp"
 #include "drape/memory_estimate.hpp"
 #include "materials.hpp"
 #include "drape/scene.hpp"
@@ -174,15 +175,26 @@ int run_command(const RunOptions& o) {
         std::snprintf(buf, sizeof buf, "%.4g", v);
         return std::string(buf);
     };
-    // A default dt below the smallest a run takes: a near-degenerate spring (a sliver triangle, two vertices almost
-    // on top of each other) sets the explicit bound.
+    // A default dt below the smallest a run takes: strong damping, or a near-degenerate spring (a sliver triangle, two
+    // vertices almost on top of each other), sets the explicit bound. (A sweep found a 100 x 100 grid of a light
+    // fabric with damping 0.1 s blamed on its mesh.)
     if (dt_default && !implicit && !(sp.dt >= 1e-9f)) {
         double shortest = std::numeric_limits<double>::max();
         for (const Edge& e : scene.cloth.edges) shortest = std::min(shortest, double(e.rest));
+        // A spring far shorter than the cloth's spacing makes both its stiffness and its damping rate huge: the
+        // mesh is the cause. On an even mesh, what sets the bound is named (the damping with its range).
+        const double spacing = cloth_spacing(scene.cloth);
+        const std::string why =
+            shortest < 0.1 * spacing
+                ? "its shortest spring is " + g(shortest) + " m long against a mean of " + g(spacing) +
+                      " m (a near-degenerate triangle or two vertices almost on top of each other): remesh the cloth"
+                : explicit_bound_cause(bound) +
+                      (damping_sets_explicit_bound(bound)
+                           ? " (material.damping: [0, " + g(fabric_range_damping.hi) + "] s)"
+                           : std::string(" (its shortest spring is ") + g(shortest) + " m long)");
         throw InvalidInput(spec.source + ": the default dt (0.9 x the explicit stability bound " + g(bound.dt_max) +
-                           " s) is " + g(sp.dt) + " s, below the smallest dt (1e-9 s): its shortest spring is " + g(shortest) +
-                           " m long (a near-degenerate triangle or two vertices almost on top of each other); "
-                           "remesh the cloth or use --solver implicit");
+                           " s) is " + g(sp.dt) + " s, below the smallest dt (1e-9 s): " + why +
+                           "; or use --solver implicit, which takes steps of up to 0.1 s at any stiffness and damping");
     }
     std::uint64_t steps = 1000;
     if (o.steps) steps = *o.steps;

@@ -86,6 +86,14 @@ expect_error "--stiffness: 'nan' is not a number" run --stiffness nan
 echo '{"cloth": {"type": "outline", "outline": [[0,0],[1,0],[0.5,1e-6]], "spacing": 0.01}, "material": "wool"}' \
     >"$tmpdir/sliver.json"
 expect_error "below the smallest dt (1e-9 s): its shortest spring is" run --scene "$tmpdir/sliver.json" --sim-seconds 0.2
+expect_error "(a near-degenerate triangle or two vertices almost on top of each other): remesh the cloth" run --scene "$tmpdir/sliver.json" --sim-seconds 0.2
+# Found by an adversarial sweep (2026-12-01): a regular grid of a light fabric whose damping sets a bound below 1e-9 s
+# was blamed on its mesh ("remesh the cloth"); the damping is named, with its range.
+echo '{"cloth": {"type": "grid", "n": 100, "size": 0.05, "pins": "corners"},
+       "material": {"density_gsm": 5, "stretch_u": 10, "stretch_v": 10, "shear": 0.01, "bend_u_uNm": 0,
+                    "bend_v_uNm": 0, "damping": 0.1}}' >"$tmpdir/damped.json"
+expect_error "below the smallest dt (1e-9 s): the damping sets that bound" run --scene "$tmpdir/damped.json"
+expect_error "(material.damping: [0, 0.1] s); or use --solver implicit" run --scene "$tmpdir/damped.json"
 echo '{"cloth": {"type": "grid", "n": 24, "pins": "corners"}, "material": "wool",
        "physics": {"solver": "implicit", "implicit": {"chebyshev_rho": 0.999999}}}' >"$tmpdir/rho.json"
 expect_exit 4 "likely cause: Chebyshev acceleration amplifying the sweeps (physics.implicit.chebyshev_rho = 0.999999)" \
