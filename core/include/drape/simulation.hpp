@@ -386,6 +386,7 @@ class Simulation {
         return sewing_ ? std::array<float, 3>{0.0f, 0.0f, 0.0f} : params_.gravity;
     }
     void cook_sewing(const InitialState& initial);
+    void refuse_seams_held_apart(const InitialState& initial) const;
     void refuse_seams_off_schedule(const float* x, const float* y, const float* z,
                                    std::span<const float> saved_rest) const;
     void refuse_overstretched_start(const InitialState& initial) const;
