@@ -76,6 +76,13 @@ std::string unconverged_implicit_warning(const Simulation& sim, float max_struct
 bool implicit_unconverged(const Simulation& sim, float max_structural_strain) noexcept;
 inline constexpr double unconverged_residual = 0.1;
 inline constexpr float unconverged_strain = 0.3f;
+/// A warning (or empty) for a run that ends with its structural springs stretched or compressed past
+/// overstretched_strain (100 %) and no implicit-convergence warning to explain it: far past what a woven or knitted
+/// fabric survives, and within the health monitor's bounds, which allow what gravity, the start and seams can supply
+/// (an adversarial sweep: a soft, heavy custom fabric at strain 12.8, a start state stretched 10 times at 31.6, both
+/// exit 0 and "healthy", silently). Says what usually causes it and that a strain limit bounds it.
+std::string overstretched_warning(const Simulation& sim, float max_structural_strain);
+inline constexpr float overstretched_strain = 1.0f;
 /// A warning when movable particles of the simulation's present state are inside a collider, deeper than half its
 /// thickness (the explicit collide stage holds them at rest there), else empty.
 std::string started_inside_warning(const Simulation& sim);

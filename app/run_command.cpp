@@ -339,6 +339,7 @@ int run_command(const RunOptions& o) {
     j["max_speed"] = health.max_speed;
     j["finite"] = health.finite && error.empty();
     j["healthy"] = health.finite && error.empty() && blow_up.empty();
+    j["overstretched"] = !overstretched_warning(sim, health.max_structural_strain).empty(); // the stderr warning
     if (!blow_up.empty()) j["health_error"] = blow_up;
     j["health"] = {{"checked", health.monitor.checked},
                    {"substep", health.monitor.substep},
@@ -419,6 +420,8 @@ int run_command(const RunOptions& o) {
     if (implicit_unconverged(sim, health.max_structural_strain))
         std::cerr << "drape run: warning: " << unconverged_implicit_warning(sim, health.max_structural_strain, false)
                   << std::endl;
+    if (const std::string w = overstretched_warning(sim, health.max_structural_strain); !w.empty())
+        std::cerr << "drape run: warning: " << w << std::endl;
     if (sp.strain_limit.ratio > 0.0f && !(health.max_limited_stretch <= 1.1f * sp.strain_limit.ratio))
         std::cerr << "drape run: warning: strain limit " << sp.strain_limit.ratio << " not honoured: max stretch "
                   << health.max_limited_stretch << " (more than 1.1 x the limit) after up to "

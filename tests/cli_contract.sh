@@ -448,6 +448,21 @@ check_health() { # check_health "python condition on j" args...
 }
 check_health "j['healthy'] and j['strain_limit_honoured'] and j['strain_limit_max_stretch'] <= 0.011 and j['kinetic_energy'] < 1 and j['health']['energy_bound'] > 0" \
     --size 32 --material springs --stiffness 100 --strain-limit 0.01 --sim-seconds 0.5
+# A run that ends with springs strained past 100 % says so (an adversarial sweep's soft, heavy custom fabric ended at
+# strain 12.8-34 "healthy" and silent): exit 0, the JSON's overstretched, one warning naming the causes and the limit.
+echo '{"cloth": {"type": "grid", "n": 8, "size": 5, "pins": "corners"},
+       "material": {"density_gsm": 2000, "stretch_u": 10, "stretch_v": 10, "shear": 0.01, "bend_u_uNm": 0,
+                    "bend_v_uNm": 0, "damping": 0}}' >"$tmpdir/soft_heavy.json"
+"$DRAPE" run --scene "$tmpdir/soft_heavy.json" --steps 500 --json >"$out" 2>"$err"
+code=$?
+if [ "$code" = 0 ] && [ "$(wc -l <"$err")" = 1 ] && grep -qF "far past what a woven or knitted fabric survives" "$err" &&
+    grep -qF "a strain limit (--strain-limit, physics.strain_limit.ratio, allowed [0, 10]) bounds it" "$err" &&
+    python3 -c "import json; j=json.load(open('$out')); assert j['overstretched'] and j['max_strain'] > 1, j"; then
+    echo "ok: overstretched run -> $(cat "$err")"
+else
+    echo "FAIL: overstretched run: exit $code"; cat "$err" "$out"; fail=1
+fi
+check_health "j['healthy'] and not j['overstretched']" --scene hang --size 32 --sim-seconds 0.5
 # Seams that start open are sewn by default (0.5 m/s): the bag without its sewing_speed field (seams 5 mm open) and
 # the square sewn to its copy across 0.3 m move gently from the first substep (snapped: 182 m/s and 1.0e4 m/s).
 sed 's/"sewing_speed": 0.5,//' "$repo/scenes/examples/bag.json" >"$tmpdir/bag_default.json"
