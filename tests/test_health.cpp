@@ -314,3 +314,25 @@ TEST(StrainLimitHealth, SpringBetweenTwoPinsIsNotTheLimitsToHold) {
     sim.step(500);
     EXPECT_LE(sim.health().max_limited_stretch, 1.1f * spec.physics.strain_limit.ratio);
 }
+
+// The first steps are checked (1, 2, 4, ... below the check interval), before the bounds grow with the distance the
+// cloth moves: a cloth placed inside a sphere and pushed out at once by the implicit solver (28 m/s) stopped when run
+// for 1-4 steps and ran "healthy" for 7 or more, when the first check was at step 8 (an adversarial sweep).
+TEST(HealthMonitor, AFlingInTheFirstStepsStopsTheRunWhateverItsLength) {
+    const char* text = R"({"cloth": {"type": "grid", "n": 30, "size": 0.3, "plane": "horizontal", "centre": [0, 0, 0],
+                           "pins": "none"}, "material": "cotton_shirting", "physics": {"drag": 0.3, "solver": "implicit"},
+                           "colliders": [{"type": "sphere", "centre": [0, 0, 0], "radius": 1.0, "thickness": 0.005,
+                                          "friction": 0.4}]})";
+    for (std::size_t steps : {1, 7, 16}) {
+        BuiltScene b = build_scene(parse_scene(text, "inside.json"));
+        Simulation sim(std::move(b.cloth), b.initial, b.params);
+        try {
+            sim.step(steps);
+            ADD_FAILURE() << steps << " steps of a cloth flung out of a sphere passed as healthy (max speed "
+                          << sim.health().max_speed << " m/s)";
+        } catch (const BlowUpError& e) {
+            EXPECT_NE(std::string(e.what()).find("blow-up at substep 1 "), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("the cloth started inside colliders"), std::string::npos) << e.what();
+        }
+    }
+}
