@@ -339,7 +339,8 @@ int run_command(const RunOptions& o) {
     j["max_speed"] = health.max_speed;
     j["finite"] = health.finite && error.empty();
     j["healthy"] = health.finite && error.empty() && blow_up.empty();
-    j["overstretched"] = !overstretched_warning(sim, health.max_structural_strain).empty(); // the stderr warning
+    const std::string overstretched = overstretched_warning(sim, health.max_structural_strain);
+    j["overstretched"] = !overstretched.empty(); // the stderr warning below
     if (!blow_up.empty()) j["health_error"] = blow_up;
     j["health"] = {{"checked", health.monitor.checked},
                    {"substep", health.monitor.substep},
@@ -420,8 +421,7 @@ int run_command(const RunOptions& o) {
     if (implicit_unconverged(sim, health.max_structural_strain))
         std::cerr << "drape run: warning: " << unconverged_implicit_warning(sim, health.max_structural_strain, false)
                   << std::endl;
-    if (const std::string w = overstretched_warning(sim, health.max_structural_strain); !w.empty())
-        std::cerr << "drape run: warning: " << w << std::endl;
+    if (!overstretched.empty()) std::cerr << "drape run: warning: " << overstretched << std::endl;
     if (sp.strain_limit.ratio > 0.0f && !(health.max_limited_stretch <= 1.1f * sp.strain_limit.ratio)) {
         // With the implicit solver at few sweeps the step itself is far from its solution (an adversarial sweep: the
         // bag at 1 sweep per 0.1 s step was told to lower the stiffness).

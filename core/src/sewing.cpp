@@ -18,6 +18,33 @@
 
 namespace drape {
 
+namespace {
+/// The length of seam k (m), in double, from positions x, y, z.
+double seam_length(const SeamSet& s, std::size_t k, const float* x, const float* y, const float* z) {
+    const double dx = double(x[s.b[k]]) - x[s.a[k]], dy = double(y[s.b[k]]) - y[s.a[k]],
+                 dz = double(z[s.b[k]]) - z[s.a[k]];
+    return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+/// The seam farthest from its rest length (rest(k)) among those `counted` takes, and how many of them are farther
+/// than `limit` (> 0 off: longer than its rest, < 0: shorter).
+struct SeamOffset {
+    double off = 0.0;
+    std::size_t at = 0, beyond = 0;
+};
+template <class Rest, class Counted>
+SeamOffset worst_seam_offset(const SeamSet& s, const float* x, const float* y, const float* z, Rest rest,
+                             Counted counted, double limit) {
+    SeamOffset w;
+    for (std::size_t k = 0; k < s.a.size(); ++k) {
+        if (!counted(k)) continue;
+        const double off = seam_length(s, k, x, y, z) - rest(k);
+        if (!(std::fabs(off) <= limit)) ++w.beyond;
+        if (std::fabs(off) > std::fabs(w.off)) w.off = off, w.at = k;
+    }
+    return w;
+}
+} // namespace
+
 // Without sewing a seam is at its rest length from the start. One that starts open (two panels placed apart) then
 // closes in a step or two, and its stretch energy flings the cloth: two canvas panels sewn across a 0.3 m gap reached
 // 3,960 m/s and a structural strain of 12.7 in 1 s, within the health monitor's bounds, which include the energy the
@@ -34,45 +61,31 @@ void Simulation::refuse_seams_off_schedule(const float* x, const float* y, const
     const double ratio = saved_rest.empty() ? double(SimulationParams::unsewn_gap_ratio)
                                             : double(SimulationParams::saved_seam_rest_ratio);
     const double limit = ratio * spacing;
-    double worst = 0.0;
-    std::size_t at = 0;
-    for (std::size_t k = 0; k < s.a.size(); ++k) {
-        const double dx = double(x[s.b[k]]) - x[s.a[k]], dy = double(y[s.b[k]]) - y[s.a[k]],
-                     dz = double(z[s.b[k]]) - z[s.a[k]];
-        const double rest = saved_rest.empty() ? double(s.rest[k]) : double(saved_rest[k]);
-        const double off = std::sqrt(dx * dx + dy * dy + dz * dz) - rest; // > 0: open, < 0: pushed apart
-        if (std::fabs(off) > std::fabs(worst)) {
-            worst = off;
-            at = k;
-        }
-    }
-    if (!(std::fabs(worst) > limit)) return;
+    const SeamOffset w = worst_seam_offset(
+        s, x, y, z, [&](std::size_t k) { return saved_rest.empty() ? double(s.rest[k]) : double(saved_rest[k]); },
+        [](std::size_t) { return true; }, limit);
+    if (w.beyond == 0) return;
+    const bool open = w.off > 0.0; // else pushed apart
     char text[720];
-    if (saved_rest.empty()) {
-        if (worst > 0.0)
-            std::snprintf(text, sizeof text,
-                          "a seam is %.3g m open (particles %u and %u) and the sewing speed is 0, so it would snap "
-                          "shut in one step and fling the cloth; set a sewing speed (physics.sewing_speed, allowed "
-                          "(0, 10] m/s; leave it out for the default 0.5) to draw the seams shut, or place the panels "
-                          "closer: without sewing a seam may be at most %.3g m open (%g x the cloth's spacing)",
-                          worst, unsigned(s.a[at]), unsigned(s.b[at]), limit, ratio);
-        else
-            std::snprintf(text, sizeof text,
-                          "a seam is %.3g m shorter than its rest length (particles %u and %u) and the sewing speed is "
-                          "0, so it would push the panels apart in one step and fling the cloth; set a sewing speed "
-                          "(physics.sewing_speed, allowed (0, 10] m/s; leave it out for the default 0.5) to let the "
-                          "seams out, or place the panels at the seams' rest length: without sewing a seam may be at "
-                          "most %.3g m shorter than its rest (%g x the cloth's spacing)",
-                          -worst, unsigned(s.a[at]), unsigned(s.b[at]), limit, ratio);
-    } else {
+    if (saved_rest.empty())
+        std::snprintf(text, sizeof text,
+                      "a seam is %.3g m %s (particles %u and %u) and the sewing speed is 0, so it would %s in one step "
+                      "and fling the cloth; set a sewing speed (physics.sewing_speed, allowed (0, 10] m/s; leave it "
+                      "out for the default 0.5) to %s, or place the panels %s: without sewing a seam may be at most "
+                      "%.3g m %s (%g x the cloth's spacing)",
+                      std::fabs(w.off), open ? "open" : "shorter than its rest length", unsigned(s.a[w.at]),
+                      unsigned(s.b[w.at]), open ? "snap shut" : "push the panels apart",
+                      open ? "draw the seams shut" : "let the seams out",
+                      open ? "closer" : "at the seams' rest length", limit,
+                      open ? "open" : "shorter than its rest", ratio);
+    else
         std::snprintf(text, sizeof text,
                       "initial state seam_rest[%zu] = %.4g m is %.3g m %s than that seam (particles %u and %u), so it "
                       "would %s; a saved seam's current rest length lies within %.3g m (%g x the cloth's spacing) of "
                       "its length (state.seam_rest in scene files; leave it out to start sewing from the positions)",
-                      at, double(saved_rest[at]), std::fabs(worst), worst > 0.0 ? "shorter" : "longer",
-                      unsigned(s.a[at]), unsigned(s.b[at]),
-                      worst > 0.0 ? "snap shut and fling the cloth" : "push the panels apart", limit, ratio);
-    }
+                      w.at, double(saved_rest[w.at]), std::fabs(w.off), open ? "shorter" : "longer",
+                      unsigned(s.a[w.at]), unsigned(s.b[w.at]),
+                      open ? "snap shut and fling the cloth" : "push the panels apart", limit, ratio);
     throw InvalidInput(text);
 }
 
@@ -85,29 +98,20 @@ void Simulation::refuse_seams_off_schedule(const float* x, const float* y, const
 void Simulation::refuse_seams_held_apart(const InitialState& initial) const {
     const SeamSet& s = cloth_.seams;
     const double limit = double(SimulationParams::saved_seam_rest_ratio) * cloth_spacing(cloth_);
-    double worst = 0.0;
-    std::size_t at = 0, held = 0;
-    for (std::size_t k = 0; k < s.a.size(); ++k) {
-        if (cloth_.inv_mass[s.a[k]] != 0.0f || cloth_.inv_mass[s.b[k]] != 0.0f) continue;
-        const double dx = double(initial.x[s.b[k]]) - initial.x[s.a[k]],
-                     dy = double(initial.y[s.b[k]]) - initial.y[s.a[k]],
-                     dz = double(initial.z[s.b[k]]) - initial.z[s.a[k]];
-        const double off = std::sqrt(dx * dx + dy * dy + dz * dz) - double(s.rest[k]);
-        if (!(std::fabs(off) <= limit)) ++held;
-        if (std::fabs(off) > std::fabs(worst)) {
-            worst = off;
-            at = k;
-        }
-    }
-    if (held == 0) return;
+    const float* w = cloth_.inv_mass.data();
+    const SeamOffset held = worst_seam_offset(
+        s, initial.x.data(), initial.y.data(), initial.z.data(), [&](std::size_t k) { return double(s.rest[k]); },
+        [&](std::size_t k) { return w[s.a[k]] == 0.0f && w[s.b[k]] == 0.0f; }, limit);
+    if (held.beyond == 0) return;
     char text[640];
     std::snprintf(text, sizeof text,
                   "a seam joins two pinned particles (%u and %u) %.3g m %s than its rest length of %.3g m (%zu such "
                   "seam%s): the pins hold it there, so it never %s, and the seams beside it would stretch the cloth "
                   "between the pins without bound; unpin one panel's edge (cloth.pins) or place the panels so that a "
                   "seam between pinned particles starts within %.3g m of its rest length (%g x the cloth's spacing)",
-                  unsigned(s.a[at]), unsigned(s.b[at]), std::fabs(worst), worst > 0.0 ? "longer" : "shorter",
-                  double(s.rest[at]), held, held == 1 ? "" : "s", worst > 0.0 ? "closes" : "reaches it", limit,
+                  unsigned(s.a[held.at]), unsigned(s.b[held.at]), std::fabs(held.off),
+                  held.off > 0.0 ? "longer" : "shorter", double(s.rest[held.at]), held.beyond,
+                  held.beyond == 1 ? "" : "s", held.off > 0.0 ? "closes" : "reaches it", limit,
                   double(SimulationParams::saved_seam_rest_ratio));
     throw InvalidInput(text);
 }
@@ -133,10 +137,7 @@ void Simulation::cook_sewing(const InitialState& initial) {
         if (!initial.seam_rest.empty()) {
             start = initial.seam_rest[k]; // a saved state: sewing resumes where it was
         } else {
-            const double dx = double(initial.x[s.b[k]]) - initial.x[s.a[k]],
-                         dy = double(initial.y[s.b[k]]) - initial.y[s.a[k]],
-                         dz = double(initial.z[s.b[k]]) - initial.z[s.a[k]];
-            start = static_cast<float>(std::sqrt(dx * dx + dy * dy + dz * dz));
+            start = static_cast<float>(seam_length(s, k, initial.x.data(), initial.y.data(), initial.z.data()));
         }
         // A seam that starts shorter than its rest (panels placed closer than it) is let out to it the same way; its
         // schedule starts at least 1 % of its rest length from zero (a current rest of 0 has no strain).
