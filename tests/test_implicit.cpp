@@ -1103,16 +1103,18 @@ TEST(Implicit, CoarseLevelsRunNoCostlierSweepsThanTheNextFinerOne) {
 
 // What --single-level is for (docs/implicit.md, "Folded and crumpled cloth on a collider"): a 24 x 24 wool cloth
 // folded in half over itself on the ground (the top half one spacing above the bottom, shifted by 0.3 spacing and
-// waved), h = 1/240 s, 30 sweeps. The exact Newton step from this start moves no particle faster than 0.995 m/s;
-// single level the fold falls open no faster than 1.21 m/s and comes to rest; with the multilevel guess it flew at
-// 6-8 m/s (measured, not asserted: that is the open problem).
+// waved), h = 1/240 s. The exact Newton step from this start moves no particle faster than 0.995 m/s; single level
+// at 100 sweeps the fold falls open no faster than 1.27 m/s and comes to rest (0.004 m/s at 0.83 s). At 30 sweeps it keeps moving at
+// up to 1-2.6 m/s for the whole 0.83 s: until 2026-12-02 the implicit solver's over-strong friction (docs/collisions.md)
+// stopped it, and the test ran 30 sweeps. With the multilevel guess it flies at about 7 m/s at first (measured, not
+// asserted: that is the open problem).
 TEST(Implicit, SingleLevelLetsAFoldedClothOnTheGroundComeToRest) {
     HangParams hp = fabric_hang(24);
     hp.size = 0.5f;
     hp.pins = GridPins::none;
     SceneBuild scene = build_hang_scene(hp);
     drape::testing::fold_over_itself(hp.n, hp.size, scene.initial);
-    SimulationParams p = implicit_params(1.0f / 240.0f, 30);
+    SimulationParams p = implicit_params(1.0f / 240.0f, 100);
     p.colliders = {make_ground(0.0f, {0.002f, 0.5f})};
     p.implicit.multilevel = false;
     Simulation sim(std::move(scene.cloth), scene.initial, p);

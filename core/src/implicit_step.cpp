@@ -417,9 +417,10 @@ template <bool Parallel> bool Simulation::multilevel_guess() {
         // first level of a free cloth half that (free_first_level).
         ImplicitParams level_params = params_.implicit;
         level_params.iterations = coarse_sweeps(params_, L.sweep_factor);
-        L.solver.run<Parallel>({L.x0.data(), L.y0.data(), L.z0.data(), L.x.data(), L.y.data(), L.z.data(),
-                                L.inv_mass.data(), params_.colliders},
-                               level_params, h, params_.air_drag);
+        vbd::LevelState st{L.x0.data(), L.y0.data(), L.z0.data(), L.x.data(), L.y.data(), L.z.data(),
+                           L.inv_mass.data(), params_.colliders};
+        st.coulomb_guess = l + 1 == is.coarse.size(); // the coarsest level starts from the inertial guess
+        L.solver.run<Parallel>(st, level_params, h, params_.air_drag);
     }
     // The cloth's guess plus the finest coarse level's correction.
     const CoarseLevel& C = is.coarse.front();
@@ -518,6 +519,9 @@ template <bool Parallel> void Simulation::implicit_step() {
     float* pred_y = is.fine.pred_y();
     float* pred_z = is.fine.pred_z();
     const float kr = params_.air_drag, drag_share = 1.0f / (1.0f + h * kr);
+    // The last step's contact normals (implicit_velocities reads them too; zero where none, or before any step).
+    const float *cnx = is.fine.contact_nx(), *cny = is.fine.contact_ny(), *cnz = is.fine.contact_nz();
+    const bool contact_history = !params_.colliders.empty();
     for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
         const std::size_t begin = blk * block_particles, end = std::min(begin + block_particles, n);
         for (std::size_t i = begin; i < end; ++i) {
@@ -559,6 +563,7 @@ template <bool Parallel> void Simulation::implicit_step() {
             // No step of this solver before (its first, or after new parameters): all of gravity for a piece of
             // cloth that nothing holds; one hanging from a fixed particle reads its history as before.
             float s = 0.0f;
+            const bool held_before = contact_history && (cnx[i] != 0.0f || cny[i] != 0.0f || cnz[i] != 0.0f);
             if (fresh && !is.piece_held[is.piece[i]]) {
                 s = 1.0f;
             } else if (g2 > 0.0f) {
@@ -572,9 +577,24 @@ template <bool Parallel> void Simulation::implicit_step() {
             // is then G's minimiser for a cloth moving as a whole. The sweeps move a stiff cloth as a whole by a
             // vertex-sized amount each, so without it a falling mesh hardly felt the drag (a 2 x 2 cloth of 25,000
             // N/m springs, drag 1/s, reached 54 m/s in 10 s; terminal velocity g / kr = 9.81 m/s).
-            b.x[i] = x + (h * vx + h2 * (s * gx + ex)) * drag_share;
-            b.y[i] = y + (h * vy + h2 * (s * gy + ey)) * drag_share;
-            b.z[i] = z + (h * vz + h2 * (s * gz + ez)) * drag_share;
+            // A particle that a collider held in the last step (its contact normal n, gravity into it): the share s
+            // of gravity's part into the surface, and all of its part along it, which the contact does not take (from
+            // the share alone, the sweeps, slow to move a stiff cloth as a whole, left a cloth on a 20-degree
+            // frictionless plane at 1/140 of its g sin 20 acceleration). A collider taken away makes the step fresh:
+            // s = 1, all of gravity.
+            float tx = s * gx, ty = s * gy, tz = s * gz;
+            if (held_before) {
+                const float nx = cnx[i], ny = cny[i], nz = cnz[i], gn = gx * nx + gy * ny + gz * nz;
+                if (gn < 0.0f) {
+                    const float into = (1.0f - s) * gn;
+                    tx = gx - into * nx;
+                    ty = gy - into * ny;
+                    tz = gz - into * nz;
+                }
+            }
+            b.x[i] = x + (h * vx + h2 * (tx + ex)) * drag_share;
+            b.y[i] = y + (h * vy + h2 * (ty + ey)) * drag_share;
+            b.z[i] = z + (h * vz + h2 * (tz + ez)) * drag_share;
         }
     });
 
@@ -583,9 +603,10 @@ template <bool Parallel> void Simulation::implicit_step() {
     const bool fas = multilevel && multilevel_guess<Parallel>();
 
     // 3. Sweeps.
-    implicit_stats_ = is.fine.run<Parallel>({a.x.data(), a.y.data(), a.z.data(), b.x.data(), b.y.data(), b.z.data(),
-                                             inv_mass, params_.colliders},
-                                            params_.implicit, h, params_.air_drag);
+    vbd::LevelState st{a.x.data(), a.y.data(), a.z.data(), b.x.data(), b.y.data(), b.z.data(), inv_mass,
+                       params_.colliders};
+    st.coulomb_guess = !multilevel; // else the coarse levels' friction is in the guess
+    implicit_stats_ = is.fine.run<Parallel>(st, params_.implicit, h, params_.air_drag);
     implicit_stats_.levels = multilevel ? static_cast<std::uint32_t>(1 + is.coarse.size()) : 1;
     implicit_stats_.fas = fas;
 

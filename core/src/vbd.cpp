@@ -402,8 +402,9 @@ void Solver::cook(const Cloth& cloth, std::span<const std::uint32_t> twin) {
     grid_ = cloth.grid ? GridLayout::cook(graph_, cloth.grid->rows, cloth.grid->columns) : nullptr;
     const std::size_t state = std::max(n, grid_ ? grid_->cells() : 0);
     for (std::vector<float>* a : {&cheb1_x_, &cheb1_y_, &cheb1_z_, &cheb2_x_, &cheb2_y_, &cheb2_z_}) a->assign(state, 0.0f);
-    for (std::vector<float>* a : {&pred_x_, &pred_y_, &pred_z_, &jac_x_, &jac_y_, &jac_z_, &contact_nx_, &contact_ny_, &contact_nz_, &contact_mu_})
+    for (std::vector<float>* a : {&pred_x_, &pred_y_, &pred_z_, &jac_x_, &jac_y_, &jac_z_, &contact_nx_, &contact_ny_, &contact_nz_})
         a->assign(n, 0.0f);
+    for (AlignedArray<float>* a : {&fr_nx_, &fr_ny_, &fr_nz_, &fr_k_}) a->reset(state);
     colour_chunk_base_.assign(graph_.colour_count() + 1, 0);
     for (std::size_t c = 0; c < graph_.colour_count(); ++c) {
         const std::size_t size = graph_.colour_offsets[c + 1] - graph_.colour_offsets[c];
@@ -427,10 +428,57 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     float *x = st.x, *y = st.y, *z = st.z;
     SweepArgs args{st.x0,    st.y0,   st.z0,         pred_x_.data(),   pred_y_.data(), pred_z_.data(), x, y, z,
                    inv_mass, &graph_, inv_h * inv_h, air_drag * inv_h, inv_h};
+    const bool colliders = !st.colliders.empty();
+    if (colliders) {
+        args.fr_nx = fr_nx_.data();
+        args.fr_ny = fr_ny_.data();
+        args.fr_nz = fr_nz_.data();
+        args.fr_k = fr_k_.data();
+        args.fr_eps = friction_slip_speed * h;
+    }
     const bool jacobi = ip.method == ImplicitMethod::jacobi;
     // A grid cloth's Gauss-Seidel sweeps run on its packed colour sub-grids (vbd_grid.hpp); the Chebyshev pass below
     // is element by element, so it runs on whichever arrays hold the iterate (count of them, mass their masses).
     const bool grid = !jacobi && grid_sweeps();
+    // Contact, vertex by vertex right after its local step (its neighbours then never see it inside a collider):
+    // out of every collider from the side the step came from. The contact's normal and its friction bound become the
+    // vertex's friction in its next local steps (SweepArgs::fr_k, written at `slot`, the vertex's place in the
+    // iterate): mu times the normal force, m/h^2 times the distance the contact holds the point from its inertial
+    // prediction (an impulse that stops the approach within the step).
+    const float inv_h2 = inv_h * inv_h;
+    auto friction_from = [&](std::size_t i, std::size_t slot, const float p[3], const float normal[3], float mu) {
+        const float held = (p[0] - pred_x_[i]) * normal[0] + (p[1] - pred_y_[i]) * normal[1] +
+                           (p[2] - pred_z_[i]) * normal[2];
+        fr_nx_[slot] = normal[0];
+        fr_ny_[slot] = normal[1];
+        fr_nz_[slot] = normal[2];
+        fr_k_[slot] = mu > 0.0f ? mu * std::max(held, 0.0f) * inv_h2 / inv_mass[i] : 0.0f;
+        return mu > 0.0f ? mu * std::max(held, 0.0f) : 0.0f;
+    };
+    // The friction of the first sweep: the contacts of the inertial prediction (the grid's cells outside the cloth
+    // keep zero). A guess that is the inertial prediction (LevelState::coulomb_guess) also loses the Coulomb share of its
+    // tangential displacement, vertex by vertex: exact for a cloth sliding as a whole, which the sweeps (slow to move
+    // a stiff cloth as a whole: its springs hold each vertex to its neighbours) then only keep.
+    if (colliders)
+        for_each_index<Parallel>((n + block_particles - 1) / block_particles, [&](std::size_t blk) {
+            for (std::size_t i = blk * block_particles, end = std::min(n, (blk + 1) * block_particles); i < end; ++i) {
+                const std::size_t slot = grid ? grid_->cell_of(i) : i;
+                float p[3] = {pred_x_[i], pred_y_[i], pred_z_[i]}, normal[3] = {0.0f, 0.0f, 0.0f};
+                const float p0[3] = {st.x0[i], st.y0[i], st.z0[i]};
+                const float mu = inv_mass[i] != 0.0f ? contact_project(st.colliders, p0, p, normal) : -1.0f;
+                const float limit = friction_from(i, slot, p, normal, std::max(mu, 0.0f));
+                if (!st.coulomb_guess || limit == 0.0f) continue;
+                // The guess's own tangential displacement (it stays where contact left it along the normal).
+                const float dx = st.x[i] - p0[0], dy = st.y[i] - p0[1], dz = st.z[i] - p0[2];
+                const float dn = dx * normal[0] + dy * normal[1] + dz * normal[2];
+                const float tx = dx - dn * normal[0], ty = dy - dn * normal[1], tz = dz - dn * normal[2];
+                const float t = std::sqrt(tx * tx + ty * ty + tz * tz);
+                const float lost = t > limit ? limit / t : 1.0f; // the share of it friction takes
+                st.x[i] -= lost * tx;
+                st.y[i] -= lost * ty;
+                st.z[i] -= lost * tz;
+            }
+        });
     std::size_t count = n;
     const float* mass = inv_mass;
     if (grid) {
@@ -446,6 +494,7 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     // Chebyshev's extrapolation and contact disagree (it throws points a collider holds back into the air: a cloth
     // resting on the ground bounced 3 cm, measured), so with colliders the sweeps run plain.
     const bool planes = st.plane_c != nullptr;
+    const bool contact = colliders || planes;
     // With few sweeps its extrapolation is left uncorrected (chebyshev_min_iterations: plain sweeps) or cycles
     // (chebyshev_full_iterations: a smaller rho).
     const float rho = chebyshev_rho_for(ip);
@@ -461,12 +510,7 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
         std::copy_n(y, count, c1y);
         std::copy_n(z, count, c1z);
     }
-    // Contact, vertex by vertex right after its local step (its neighbours then never see it inside a collider):
-    // out of every collider from the side the step came from; the normal of the last contact is kept for friction.
-    const bool colliders = !st.colliders.empty(), contact = colliders || planes;
-    // Coulomb friction in the same place: the step's tangential displacement loses up to mu times the normal
-    // displacement the contact holds the point away from its inertial prediction (stick when it is smaller).
-    auto keep_out = [&](std::size_t i, float p[3]) {
+    auto keep_out = [&](std::size_t i, std::size_t slot, float p[3]) {
         if (planes) { // self-contact: not closer to the partner than the plane the contact left the vertex on
             const float nx = st.plane_nx[i], ny = st.plane_ny[i], nz = st.plane_nz[i];
             const float gap = st.plane_c[i] - (nx * p[0] + ny * p[1] + nz * p[2]);
@@ -480,27 +524,10 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
         const float p0[3] = {st.x0[i], st.y0[i], st.z0[i]};
         float normal[3] = {0.0f, 0.0f, 0.0f};
         const float mu = contact_project(st.colliders, p0, p, normal);
-        if (mu < 0.0f) {
-            contact_nx_[i] = contact_ny_[i] = contact_nz_[i] = 0.0f;
-            return;
-        }
-        if (mu > 0.0f) {
-            const float held = (p[0] - pred_x_[i]) * normal[0] + (p[1] - pred_y_[i]) * normal[1] +
-                               (p[2] - pred_z_[i]) * normal[2];
-            const float dx = p[0] - p0[0], dy = p[1] - p0[1], dz = p[2] - p0[2];
-            const float dn = dx * normal[0] + dy * normal[1] + dz * normal[2];
-            const float tx = dx - dn * normal[0], ty = dy - dn * normal[1], tz = dz - dn * normal[2];
-            const float t = std::sqrt(tx * tx + ty * ty + tz * tz);
-            const float limit = mu * std::max(held, 0.0f);
-            const float keep = t > limit ? 1.0f - limit / t : 0.0f; // the part of the tangential displacement kept
-            p[0] -= (1.0f - keep) * tx;
-            p[1] -= (1.0f - keep) * ty;
-            p[2] -= (1.0f - keep) * tz;
-        }
+        friction_from(i, slot, p, normal, std::max(mu, 0.0f));
         contact_nx_[i] = normal[0];
         contact_ny_[i] = normal[1];
         contact_nz_[i] = normal[2];
-        contact_mu_[i] = mu;
     };
     ImplicitStats stats;
     for (std::uint32_t it = 0; it < ip.iterations; ++it) {
@@ -533,7 +560,7 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
                                 if (inv_mass[i] == 0.0f) continue;
                                 r += g2[lane];
                                 float out[3] = {ox[lane], oy[lane], oz[lane]};
-                                if (contact) keep_out(i, out);
+                                if (contact) keep_out(i, i, out);
                                 x[i] = out[0];
                                 y[i] = out[1];
                                 z[i] = out[2];
@@ -547,7 +574,7 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
                         if (inv_mass[i] == 0.0f) continue;
                         float out[3];
                         r += solve_vertex(args, i, out);
-                        if (contact) keep_out(i, out);
+                        if (contact) keep_out(i, i, out);
                         x[i] = out[0];
                         y[i] = out[1];
                         z[i] = out[2];
@@ -564,7 +591,7 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
                     float out[3] = {x[i], y[i], z[i]};
                     if (inv_mass[i] != 0.0f) {
                         r += solve_vertex(args, static_cast<std::uint32_t>(i), out);
-                        if (contact) keep_out(i, out);
+                        if (contact) keep_out(i, i, out);
                     }
                     jac_x_[i] = out[0];
                     jac_y_[i] = out[1];

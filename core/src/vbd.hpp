@@ -11,7 +11,9 @@
 
 #include <memory>
 #include <span>
+#include <type_traits>
 
+#include "drape/aligned_array.hpp"
 #include "drape/cloth.hpp"
 #include "drape/colliders.hpp"
 #include "drape/implicit.hpp"
@@ -47,6 +49,9 @@ struct LevelState {
     const float* plane_ny = nullptr;
     const float* plane_nz = nullptr;
     const float* plane_c = nullptr;
+    /// The guess is the step's inertial prediction (no friction in it yet): its vertices in contact with a collider
+    /// lose the Coulomb share of their tangential displacement before the sweeps (Solver::run).
+    bool coulomb_guess = false;
 };
 
 /// Contact inside the sweeps: if p is inside a collider (its inflated solid, colliders.hpp), moves it onto the tangent
@@ -86,12 +91,10 @@ class Solver {
     float* pred_x() noexcept { return pred_x_.data(); }
     float* pred_y() noexcept { return pred_y_.data(); }
     float* pred_z() noexcept { return pred_z_.data(); }
-    /// Per vertex after run(): the unit normal of the contact that held it in the last sweep (0 0 0: none) and the
-    /// collider's friction.
+    /// Per vertex after run(): the unit normal of the contact that held it in the last sweep (0 0 0: none).
     const float* contact_nx() const noexcept { return contact_nx_.data(); }
     const float* contact_ny() const noexcept { return contact_ny_.data(); }
     const float* contact_nz() const noexcept { return contact_nz_.data(); }
-    const float* contact_mu() const noexcept { return contact_mu_.data(); }
     /// Runs the sweeps of one step of length h with air drag kr (1/s). No allocation.
     template <bool Parallel>
     ImplicitStats run(const LevelState& s, const ImplicitParams& params, float h, float air_drag);
@@ -115,7 +118,8 @@ class Solver {
     VbdGraph graph_;
     std::vector<float> pred_x_, pred_y_, pred_z_, cheb1_x_, cheb1_y_, cheb1_z_, cheb2_x_, cheb2_y_, cheb2_z_;
     std::vector<float> jac_x_, jac_y_, jac_z_;
-    std::vector<float> contact_nx_, contact_ny_, contact_nz_, contact_mu_;
+    std::vector<float> contact_nx_, contact_ny_, contact_nz_;
+    AlignedArray<float> fr_nx_, fr_ny_, fr_nz_, fr_k_; ///< SweepArgs' friction, in the iterate's order
     std::vector<double> chunk_residual_;          ///< per fixed chunk of a sweep: sum of |g_i|^2
     std::vector<std::uint32_t> colour_chunk_base_; ///< per colour: its first chunk in chunk_residual_
     std::unique_ptr<VbdSlices> slices_;
@@ -139,7 +143,34 @@ struct SweepArgs {
     float inv_h2;      ///< 1 / h^2
     float drag_over_h; ///< kr / h
     float inv_h;       ///< 1 / h
+    /// Coulomb friction against the colliders (docs/collisions.md, "Friction inside the sweeps"), per vertex in the
+    /// iterate's order (particles; cells on a grid layout): the unit normal of its contact and the bound mu |f_n| (N)
+    /// of its friction force, lagged (from the step's initial guess, then each sweep's contact). Null: no friction.
+    /// It adds the smoothed Coulomb potential D = fr_k f0(|u|), u = (I - n n^T)(x_i - x_i^n), to the vertex's local
+    /// objective, as a quadratic majorizer at the iterate: gradient w u, Hessian w (I - n n^T), w = fr_k f1(|u|) / |u|
+    /// (f1(s) = 1 beyond fr_eps, s / fr_eps (2 - s / fr_eps) below: IPC's smoothing of the stick-slip switch).
+    const float* fr_nx = nullptr;
+    const float* fr_ny = nullptr;
+    const float* fr_nz = nullptr;
+    const float* fr_k = nullptr;
+    float fr_eps = 0.0f; ///< slip (m) below which friction is smoothed: friction_slip_speed h
 };
+
+/// The sliding speed (m/s) below which the implicit solver's friction is smoothed (IPC's eps_v; Li et al. 2020 use
+/// 1e-3 m/s): a vertex pushed along a surface by less than its friction bound creeps at most about this fast.
+inline constexpr float friction_slip_speed = 1e-3f;
+
+/// The friction weight w = fr_k f1(s) / s of SweepArgs for a tangential slip s (one definition for the scalar and
+/// the SIMD sweeps: T = float or simd::fbatch, the same operations).
+template <class T> inline T friction_weight(T k, T s, T eps) noexcept {
+    const T one(1.0f), two(2.0f);
+    if constexpr (std::is_same_v<T, float>) {
+        return k * (s >= eps ? one / s : (two - s / eps) / eps);
+    } else {
+        const auto slipping = s >= eps;
+        return k * simd::select(slipping, one / simd::select(slipping, s, one), (two - s / eps) / eps);
+    }
+}
 
 /// Halvings of a local step before it is dropped. The local Hessian of a flat, unstretched cloth has no stiffness
 /// across it (its springs lie in its plane) while the energy grows like the fourth power of an out-of-plane move, so a
@@ -243,6 +274,24 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
         qhxx += d;
         qhyy += d;
         qhzz += d;
+    }
+    // Friction (SweepArgs::fr_k): a quadratic term at the iterate, gradient w u, Hessian w (I - n n^T).
+    if (a.fr_k != nullptr) {
+        const float nx = a.fr_nx[i], ny = a.fr_ny[i], nz = a.fr_nz[i];
+        const float dn = std::fma(dzi, nz, std::fma(dyi, ny, dxi * nx));
+        const float ux = std::fma(-dn, nx, dxi), uy = std::fma(-dn, ny, dyi), uz = std::fma(-dn, nz, dzi);
+        const float s = std::sqrt(std::fma(uz, uz, std::fma(uy, uy, ux * ux)));
+        const float w = friction_weight(a.fr_k[i], s, a.fr_eps);
+        gx = std::fma(w, ux, gx);
+        gy = std::fma(w, uy, gy);
+        gz = std::fma(w, uz, gz);
+        const float wx = w * nx, wy = w * ny;
+        qhxx += std::fma(-wx, nx, w);
+        qhyy += std::fma(-wy, ny, w);
+        qhzz += std::fma(-w * nz, nz, w);
+        qhxy = std::fma(-wx, ny, qhxy);
+        qhxz = std::fma(-wx, nz, qhxz);
+        qhyz = std::fma(-wy, nz, qhyz);
     }
     // Total: quadratic terms plus the springs' stretch (hxx.. so far hold inertia + the springs' projected Hessian).
     hxx += qhxx - base;

@@ -141,6 +141,23 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
         qhyy = qhyy + d;
         qhzz = qhzz + d;
     }
+    if (a.fr_k != nullptr) { // friction, as solve_vertex
+        const fbatch nx = src.own(a.fr_nx), ny = src.own(a.fr_ny), nz = src.own(a.fr_nz);
+        const fbatch dn = simd::fma(dzi, nz, simd::fma(dyi, ny, dxi * nx));
+        const fbatch ux = simd::fnma(dn, nx, dxi), uy = simd::fnma(dn, ny, dyi), uz = simd::fnma(dn, nz, dzi);
+        const fbatch s = xsimd::sqrt(simd::fma(uz, uz, simd::fma(uy, uy, ux * ux)));
+        const fbatch wf = friction_weight(src.own(a.fr_k), s, fbatch(a.fr_eps));
+        gx = simd::fma(wf, ux, gx);
+        gy = simd::fma(wf, uy, gy);
+        gz = simd::fma(wf, uz, gz);
+        const fbatch wx = wf * nx, wy = wf * ny;
+        qhxx = qhxx + simd::fnma(wx, nx, wf);
+        qhyy = qhyy + simd::fnma(wy, ny, wf);
+        qhzz = qhzz + simd::fnma(wf * nz, nz, wf);
+        qhxy = simd::fnma(wx, ny, qhxy);
+        qhxz = simd::fnma(wx, nz, qhxz);
+        qhyz = simd::fnma(wy, nz, qhyz);
+    }
     hxx = hxx + (qhxx - base);
     hyy = hyy + (qhyy - base);
     hzz = hzz + (qhzz - base);

@@ -45,6 +45,8 @@ class GridLayout {
     std::size_t cells() const noexcept { return cells_; }
     std::size_t colour_count() const noexcept { return colour_class_.size(); }
     std::size_t chunks_per_colour() const noexcept { return chunks_; }
+    /// The cell of particle i.
+    std::size_t cell_of(std::size_t i) const noexcept { return cell_of_[i]; }
     std::size_t spring_slots() const noexcept { return spring_dir_.size(); }
     std::size_t bend_slots() const noexcept { return bend_dir_.size(); }
     std::uint32_t period() const noexcept { return period_; }
@@ -68,7 +70,7 @@ class GridLayout {
 
     /// Solves chunk `chunk` of colour `colour` (a fixed run of batches, so the chunks' residuals are the same for any
     /// thread count): each movable vertex's new position goes into the packed iterate, through `keep_out`
-    /// when there are colliders (keep_out(particle, float[3])). Returns the chunk's sum of |g|^2 in lane order.
+    /// when there are colliders (keep_out(particle, cell, float[3])). Returns the chunk's sum of |g|^2 in lane order.
     template <class KeepOut>
     double solve_chunk(const SweepArgs& packed, std::size_t colour, std::size_t chunk, bool contact,
                        KeepOut&& keep_out) noexcept;
@@ -186,7 +188,7 @@ double GridLayout::solve_chunk(const SweepArgs& a, std::size_t colour, std::size
         for (std::size_t lane = 0; lane < W; ++lane) {
             if (inv_mass_[o + lane] == 0.0f) continue;
             float out[3] = {lx[lane], ly[lane], lz[lane]};
-            keep_out(particle_[o + lane], out);
+            keep_out(particle_[o + lane], o + lane, out);
             x_[o + lane] = out[0];
             y_[o + lane] = out[1];
             z_[o + lane] = out[2];
