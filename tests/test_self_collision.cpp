@@ -377,7 +377,10 @@ TEST(SelfCollision, ImplicitCrumpledPileInContactSubStepsNeverIntersectsItself) 
     const ImplicitPileRun sub = run_implicit_pile(SelfCollision{}.substeps, 30);
     EXPECT_EQ(sub.pairs, 0u) << "intersecting triangle pairs after some step";
     EXPECT_GT(sub.contacts, 0u) << "the pleats never met: the test would not test the sub-steps";
-    EXPECT_LT(sub.strain, 0.6f) << "a spring stretched by more than 60%";
+    // 0.6 until 2026-12-02, when the implicit solver's friction was far too strong and held the pile still where it
+    // touched the ground; with Coulomb friction the largest strain at a check is 0.46-0.72 (measured with the
+    // sub-steps single level always / single level while crowded, docs/self_collision.md "Contact sub-steps").
+    EXPECT_LT(sub.strain, 0.8f) << "a spring stretched by more than 80%";
     EXPECT_GT(sub.substepped, 0u) << "no step ran in sub-steps";
 }
 
@@ -554,27 +557,35 @@ TEST(SelfCollision, ImplicitGrabJumpThroughALayerIsPutBack) {
     }
     EXPECT_GT(sim.self_collision_substepped(), 0u) << "the jump did not make a step touch: not the case tested";
     EXPECT_EQ(worst, 0u) << "the grabbed particle was kept on the far side of the layer it jumped through";
-    // The sub-steps ran half the step's sweeps each, and gave the step's length and sweeps back.
+    // The sub-steps gave the step's length and sweeps back.
     EXPECT_EQ(sim.params().dt, pile.params.dt);
     EXPECT_EQ(sim.params().implicit.iterations, pile.params.implicit.iterations);
 }
 
-TEST(SelfCollision, ContactSubStepsRunHalfTheSweepsOfTheStep) {
+// The contact sub-steps run at the step's sweeps, single level while the cloth is crowded against itself (the
+// multilevel guess flings crumpled cloth: with it the implicit pile exploded once friction stopped holding it,
+// docs/self_collision.md), and give the step's settings back. The folded pile is crowded (hundreds of contacts of its
+// 576 particles); the steps not in sub-steps keep the multilevel guess.
+TEST(SelfCollision, ContactSubStepsRunTheStepsSweepsSingleLevelWhenCrowded) {
     for (std::uint32_t iterations : {30u, 7u}) {
         Pile pile = folded_pile(0.004f, Solver::implicit);
         pile.params.implicit.iterations = iterations;
         pile.params.implicit.tolerance = 0.0f;
         Simulation sim(std::move(pile.scene.cloth), pile.scene.initial, pile.params);
-        std::uint32_t touched = 0, alone = 0;
+        std::uint32_t single = 0, alone = 0;
         for (int s = 0; s < 12; ++s) {
             const std::size_t before = sim.self_collision_substepped();
             sim.step(1);
             const bool sub = sim.self_collision_substepped() > before;
-            EXPECT_EQ(sim.implicit_stats().iterations, sub ? (iterations + 1) / 2 : iterations) << "step " << s;
-            (sub ? touched : alone) += 1;
+            EXPECT_EQ(sim.implicit_stats().iterations, iterations) << "step " << s;
+            if (!sub) EXPECT_GT(sim.implicit_stats().levels, 1u) << "step " << s;
+            single += sub && sim.implicit_stats().levels == 1u;
+            alone += !sub;
             EXPECT_EQ(sim.params().implicit.iterations, iterations);
+            EXPECT_TRUE(sim.params().implicit.multilevel);
         }
-        EXPECT_GT(touched, 0u) << "no step in sub-steps: not the case tested";
+        EXPECT_GT(single, 0u) << "no sub-stepped step ended single level: not the case tested";
+        EXPECT_GT(alone, 0u) << "every step in sub-steps: the multilevel steps were not seen";
     }
 }
 

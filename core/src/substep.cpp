@@ -259,32 +259,44 @@ template <bool Parallel> bool Simulation::step_pipeline(bool implicit, bool atte
 }
 
 template <bool Parallel> void Simulation::contact_substeps() {
-    // params_.dt is the sub-step's length while they run (every stage reads it), and params_.implicit.iterations the
-    // sub-step's sweeps (below); both are the step's again after, also when a sub-step throws.
+    // params_.dt is the sub-step's length while they run (every stage reads it), and params_.implicit.multilevel is
+    // chosen per sub-step (below); both are the step's again after, also when a sub-step throws.
     struct Restore {
         float& dt;
         float frame;
-        std::uint32_t& iterations;
-        std::uint32_t frame_iterations;
-        ~Restore() { dt = frame, iterations = frame_iterations; }
-    } restore{params_.dt, params_.dt, params_.implicit.iterations, params_.implicit.iterations};
+        bool& multilevel;
+        bool frame_multilevel;
+        ~Restore() { dt = frame, multilevel = frame_multilevel; }
+    } restore{params_.dt, params_.dt, params_.implicit.multilevel, params_.implicit.multilevel};
     // No sub-step below the implicit solver's shortest step (its motion would be lost to rounding).
     const std::uint32_t k = std::max<std::uint32_t>(
         1, std::min<std::uint32_t>(params_.self_collision.substeps,
                                    static_cast<std::uint32_t>(restore.frame / implicit_min_dt)));
     const double start = step_time_;
     params_.dt = restore.frame / float(k);
-    // A sub-step of dt / K is better conditioned than the frame (the inertia term grows like K^2) and starts nearer its
-    // solution, so it runs half the frame's iterations (rounded up). Measured at K = 4 (docs/self_collision.md,
-    // "Contact sub-steps"): the folded N = 100 cloth 415 -> 300 ms a step, the N = 100 hang 17.7 -> 15.2 s with the same
-    // strain, the crumpled pile still without an intersecting pair at three step lengths; a quarter of them let the
-    // pile cross itself (49 pairs).
-    params_.implicit.iterations = (restore.frame_iterations + 1) / 2;
+    // The sub-steps run at the frame's sweeps, and single level while the cloth is crowded against itself: when the
+    // stage's last run found contacts at more than crowded_contact_share of the particles. The coarse levels cannot
+    // represent a cloth lying in pleats on itself and fling it: once friction no longer held it (2026-12-02), the
+    // implicit crumpled pile with multilevel sub-steps at half the frame's sweeps (as until then) ended 1 s at 5.5 J,
+    // 14.6 m/s, strain 0.70 (at friction 0 before the fix the same: 0.71 J, 6.5 m/s, 0.57), and at the frame's sweeps
+    // at 0.83 J, 7.0 m/s. Single level always made a hang that touches itself here and there sag and flap (N = 100,
+    // 2 s: strain 0.71, 162 s wall, against 0.066 and 6.9 s), where the single-level solve does not converge. Measured
+    // contacts per step: the N = 100 hang 0-10 of 10,000 particles; the pile 30-1,676 of 4,096 (docs/self_collision.md,
+    // "Contact sub-steps").
     for (std::uint32_t j = 0; j < k; ++j) {
         step_time_ = start + double(j) * double(params_.dt);
+        // The first sub-step asks the last sub-stepped step's end (the frame-long attempt only probed for one contact);
+        // with none before it, it counts as crowded (the pile's impact, its first contact, flung by a multilevel first
+        // sub-step: 12 intersecting pairs, strain 0.66).
+        const bool crowded =
+            j == 0 ? sc_substepped_ == 0 ||
+                         double(sc_substep_contacts_) > crowded_contact_share * double(cloth_.particle_count)
+                   : double(sc_contacts_) > crowded_contact_share * double(cloth_.particle_count);
+        params_.implicit.multilevel = restore.frame_multilevel && !crowded;
         step_pipeline<Parallel>(true, false);
         current_ = 1 - current_;
     }
+    sc_substep_contacts_ = sc_contacts_;
 }
 
 /// The health monitor's check (health_monitor.hpp): on an explosion, back to the last check that passed and throw.

@@ -96,6 +96,10 @@ struct SelfCollision {
     std::uint32_t substeps = 4;
 };
 inline constexpr std::uint32_t self_collision_max_substeps = 16;
+/// A contact sub-step runs single level (no multilevel guess) when the self-collision stage's last run found contacts
+/// at more than this share of the particles: a cloth crowded against itself (a crumpled pile), which the coarse levels
+/// cannot represent (core/src/substep.cpp, contact_substeps).
+inline constexpr double crowded_contact_share = 0.005;
 inline constexpr float self_collision_min_thickness = 0.0005f;
 inline constexpr float self_collision_max_thickness = 0.05f;
 
@@ -454,6 +458,7 @@ class Simulation {
     std::vector<std::uint32_t> sc_hits_; ///< per particle: contacts that pushed it
     float sc_shortest_rest_ = 0.0f; ///< shortest rest length along a triangle edge (1-ring exemption), m
     std::size_t sc_contacts_ = 0;        ///< contacts applied in the last run's first round (self_contacts)
+    std::size_t sc_substep_contacts_ = 0; ///< sc_contacts_ after the last contact sub-step (contact_substeps)
     // The snapshot of the last run (positions after its pushes, and the step it ended): the stage runs again only once
     // some particle has moved more than a quarter of the thickness from it, and takes each pair's side from it.
     std::vector<float> sc_snap_x_, sc_snap_y_, sc_snap_z_;
