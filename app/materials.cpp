@@ -235,19 +235,22 @@ bool implicit_unconverged(const Simulation& sim, float max_structural_strain) no
            sim.implicit_stats().relative_residual > unconverged_residual;
 }
 
-std::string overstretched_warning(const Simulation& sim, float max_structural_strain) {
+std::string overstretched_warning(const Simulation& sim, float max_structural_strain, bool viewer) {
     if (!(max_structural_strain > overstretched_strain) || implicit_unconverged(sim, max_structural_strain)) return {};
     const float limit = sim.params().strain_limit.ratio;
+    const char* fix = limit > 0.0f ? (viewer ? "the Physics panel's strain limit did not hold it"
+                                             : "the strain limit on (physics.strain_limit.ratio) did not hold it")
+                      : viewer     ? "the Physics panel's strain limit bounds it"
+                                   : "a strain limit (--strain-limit, physics.strain_limit.ratio, allowed [0, 10]) "
+                                     "bounds it";
     char text[700];
     std::snprintf(text, sizeof text,
-                  "the cloth ends with a structural spring strained by %.0f %% (strain %.3g), far past what a woven or "
+                  "the cloth %s a structural spring strained by %.0f %% (strain %.3g), far past what a woven or "
                   "knitted fabric survives (a few tens of %%): a stretch stiffness (N/m) too low for the fabric's "
                   "weight and size, pins or seams holding panels apart, colliders squeezing it, or a start state "
                   "stretched so; %s",
-                  100.0 * double(max_structural_strain), double(max_structural_strain),
-                  limit > 0.0f ? "the strain limit on (physics.strain_limit.ratio) did not hold it"
-                               : "a strain limit (--strain-limit, physics.strain_limit.ratio, allowed [0, 10]) bounds "
-                                 "it");
+                  viewer ? "has" : "ends with", 100.0 * double(max_structural_strain), double(max_structural_strain),
+                  fix);
     return text;
 }
 

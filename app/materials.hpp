@@ -81,7 +81,8 @@ inline constexpr float unconverged_strain = 0.3f;
 /// fabric survives, and within the health monitor's bounds, which allow what gravity, the start and seams can supply
 /// (an adversarial sweep: a soft, heavy custom fabric at strain 12.8, a start state stretched 10 times at 31.6, both
 /// exit 0 and "healthy", silently). Says what usually causes it and that a strain limit bounds it.
-std::string overstretched_warning(const Simulation& sim, float max_structural_strain);
+/// With `viewer`, in the viewer's words (the strain now, the Physics panel's strain limit).
+std::string overstretched_warning(const Simulation& sim, float max_structural_strain, bool viewer = false);
 inline constexpr float overstretched_strain = 1.0f;
 /// A warning when movable particles of the simulation's present state are inside a collider, deeper than half its
 /// thickness (the explicit collide stage holds them at rest there), else empty.

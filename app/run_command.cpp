@@ -309,8 +309,14 @@ int run_command(const RunOptions& o) {
                          {"fas_last_step", st.fas}, // the last step's coarse levels solved with FAS
                          // the cloth strained past 30 % with the last step's residual above 0.1 (the stderr warning)
                          {"unconverged", implicit_unconverged(sim, health.max_structural_strain)},
-                         {"multilevel", sp.implicit.multilevel},
-                         {"levels", st.levels}, // grids the last step solved: 1 + coarse levels
+                         {"multilevel", sp.implicit.multilevel}, // the setting (physics.implicit.multilevel)
+                         // grids this cloth has: 1 = no coarse levels (a T-shirt, mask, OBJ or springs cloth, or a grid
+                         // under 10 x 10), so the setting has nothing to act on (an adversarial sweep read
+                         // "multilevel": true beside "levels": 1 as a contradiction)
+                         {"levels_available", sim.implicit_levels()},
+                         // grids the last step solved: 1 + coarse levels; 1 also when the setting is off or contact
+                         // sub-steps ran single level (self_collision.substepped)
+                         {"levels", st.levels},
                          {"method", sp.implicit.method == ImplicitMethod::jacobi ? "jacobi" : "gauss_seidel"}};
     }
     j["kernel"] = kernel_path_name(sim.kernel());

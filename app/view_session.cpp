@@ -696,6 +696,13 @@ void ViewSession::note_published_strain(float max_structural_strain) {
         post(MessageLevel::warning, unconverged_implicit_warning(*sim_, max_structural_strain, true, budget_limited));
     }
     unconverged_warned_ = applies;
+    // Past 100 % strain for another reason (drape run's end-of-run warning): once each time it starts to apply; not
+    // while the user drags a particle, whose pull they see (an adversarial sweep: a cloth started 10 times its size
+    // ran at strain 32 in the viewer with nothing said).
+    const std::string over = sim_->grabbed() == SIZE_MAX ? overstretched_warning(*sim_, max_structural_strain, true)
+                                                         : std::string();
+    if (!over.empty() && !overstretched_warned_) post(MessageLevel::warning, over);
+    overstretched_warned_ = !over.empty();
 }
 
 void ViewSession::note_real_time_factor(double factor) {

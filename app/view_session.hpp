@@ -336,7 +336,7 @@ class ViewSession {
     const Message& message() const noexcept { return message_; }
     void post(MessageLevel level, std::string text);
     /// After a publish (the step joined, none running): posts unconverged_implicit_warning (materials.hpp) for the
-    /// published strain once each time it starts to apply.
+    /// published strain once each time it starts to apply, and likewise overstretched_warning (not during a grab).
     void note_published_strain(float max_structural_strain);
     /// The overlay's real-time factor (simulated seconds per wall second over ~0.5 s), safe while a step runs. Below
     /// slow_explicit_factor with the explicit solver, posts once per cloth that the implicit solver steps a frame at a
@@ -403,6 +403,7 @@ class ViewSession {
     bool thickness_warned_ = false;
     bool inside_warned_ = false;
     bool unconverged_warned_ = false;
+    bool overstretched_warned_ = false;
     /// The cloth the slow-explicit hint was for: the scene (scene_generation_) and its particle count, so a reset,
     /// an undo or a node-mass rebuild of the same cloth does not repeat it.
     std::pair<std::uint64_t, std::size_t> slow_hinted_for_{UINT64_MAX, 0};

@@ -231,7 +231,7 @@ assert j["solver"] == "implicit" and j["integrator"] == "euler", j
 assert j["steps"] == j["substeps"] == 4 and abs(j["dt"] - 0.05) < 1e-9 and j["dt"] > j["dt_max"], j
 im = j["implicit"]
 assert 1 <= im["iterations"] <= 20 and im["max_iterations"] == 20 and im["method"] == "gauss_seidel", im
-assert im["multilevel"] is True and im["levels"] > 1, im  # a 100 x 100 fabric grid: the multilevel guess
+assert im["multilevel"] is True and im["levels"] > 1 and im["levels_available"] == im["levels"], im  # a 100 x 100 fabric grid: the multilevel guess
 assert math.isfinite(im["relative_residual"]) and im["relative_residual"] >= 0, im
 assert j["real_time_factor"] > 0 and j["finite"] and j["healthy"], j
 print("ok: drape run --solver implicit --size 100 --dt 0.05 -> %d iterations, residual %.3g, %.3gx real time"
@@ -240,6 +240,12 @@ PY
     :
 else
     echo "FAIL: an implicit run"; cat "$err" "$out"; fail=1
+fi
+# A cloth without coarse levels says so beside the setting (an adversarial sweep read "multilevel": true, "levels": 1).
+if "$DRAPE" run --scene tshirt --solver implicit --steps 1 --json 2>/dev/null | python3 -c "import json,sys; im=json.load(sys.stdin)['implicit']; assert im['multilevel'] is True and im['levels_available'] == 1 and im['levels'] == 1, im"; then
+    echo "ok: the T-shirt's implicit JSON reports the multilevel setting with no coarse levels available"
+else
+    echo "FAIL: the T-shirt's implicit levels fields"; fail=1
 fi
 if "$DRAPE" run --steps 3 --json | python3 -c "import json,sys; j=json.load(sys.stdin); assert j['solver']=='explicit' and 'implicit' not in j and j['real_time_factor'] > 0, j"; then
     echo "ok: an explicit run reports solver explicit and its real-time factor"

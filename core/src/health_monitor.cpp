@@ -315,6 +315,17 @@ std::string HealthMonitor::check(const Cloth& cloth, const SimulationParams& par
         msg << "the cloth started inside colliders (" << started_inside_ << " particles): move the cloth or the colliders";
     else if (user_speed_ > 0.0f)
         msg << "a fast grab (up to " << user_speed_ << " m/s): move the grabbed particle more slowly";
+    else if (strain_b_ > stretched_baseline_strain)
+        // A start stretched by half or more snaps back and crumples: a spring compressed far below its rest length
+        // is stiffer across itself than the stability bound assumes (an adversarial sweep: a start stretched 1.5
+        // times blew up at once and was blamed on a state "changed from outside").
+        msg << "the state it started from (or was last reset to by a grab, pin or parameter change) already stretched "
+               "a structural spring by "
+            << 100.0 * strain_b_ << " % (strain " << strain_b_
+            << "): released, the springs snap back and crumple faster than the steps resolve; start from a less "
+               "stretched state (state.positions), or bound it with a strain limit (--strain-limit, "
+               "physics.strain_limit.ratio)"
+            << (implicit ? "" : " or the implicit solver (--solver implicit)");
     else if (implicit && params.implicit.chebyshev_rho > 0.95f)
         msg << "Chebyshev acceleration amplifying the sweeps (physics.implicit.chebyshev_rho = "
             << std::setprecision(7) << params.implicit.chebyshev_rho << std::setprecision(4) << "): lower it (default 0.9; 0 turns it off)";

@@ -66,6 +66,8 @@ class HealthMonitor {
     /// limit's ratio, if more). Well above what soft heavy fabrics reach (a 3 m hang of 2000 g/m^2 at 10 N/m: ~12 as it
     /// swings) or a short edge of an OBJ mesh in series with long ones.
     static constexpr double strain_ceiling = 50.0;
+    /// A baseline strained past this is named as a blow-up's likely cause (springs far from rest snap back).
+    static constexpr double stretched_baseline_strain = 0.3;
 
     /// Sizes the scratch (the only allocation) and records the scene's constants.
     void init(const Cloth& cloth, const SimulationParams& params);
