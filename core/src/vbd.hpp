@@ -194,6 +194,20 @@ template <class T> struct DampingHessian {
     }
 };
 
+/// Adds a I + b u u^T to a symmetric 3x3 block (xx yy zz xy xz yz): a spring's projected Hessian (a = c, b = k - c)
+/// and friction's w (I - n n^T) (a = w, b = -w). T = float (solve_vertex) or simd::fbatch (solve_lanes): one
+/// definition, so the scalar reference and the SIMD sweeps do the same operations in the same order.
+template <class T>
+inline void add_isotropic_outer(T a, T b, T ux, T uy, T uz, T& xx, T& yy, T& zz, T& xy, T& xz, T& yz) noexcept {
+    const T tx = b * ux, ty = b * uy;
+    xx = xx + simd::fma(tx, ux, a);
+    yy = yy + simd::fma(ty, uy, a);
+    zz = zz + simd::fma(b * uz, uz, a);
+    xy = simd::fma(tx, uy, xy);
+    xz = simd::fma(tx, uz, xz);
+    yz = simd::fma(ty, uz, yz);
+}
+
 /// The local Newton step of vertex i (movable): writes the new position and returns |g_i|^2 (N^2). GradientOnly:
 /// writes g_i (the gradient of G at the iterate, N) instead and takes no step.
 template <bool GradientOnly = false>
@@ -236,13 +250,7 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
         const float c = k * std::max(0.0f, std::fma(-l, inv_len, 1.0f));
         // A zero-length spring at its rest: E = k/2 |d|^2, Hessian k I.
         const float cm = stretched ? c : (l == 0.0f ? k : 0.0f), cu = stretched ? k - c : 0.0f;
-        const float tx = cu * ux, ty = cu * uy;
-        hxx += std::fma(tx, ux, cm);
-        hyy += std::fma(ty, uy, cm);
-        hzz += std::fma(cu * uz, uz, cm);
-        hxy = std::fma(tx, uy, hxy);
-        hxz = std::fma(tx, uz, hxz);
-        hyz = std::fma(ty, uz, hyz);
+        add_isotropic_outer(cm, cu, ux, uy, uz, hxx, hyy, hzz, hxy, hxz, hyz);
         const float kd = g.spring_kd[e] * a.inv_h;
         const float nx = a.x0[j] - a.x0[i], ny = a.y0[j] - a.y0[i], nz = a.z0[j] - a.z0[i];
         const float n2 = std::fma(nz, nz, std::fma(ny, ny, nx * nx));
@@ -285,13 +293,7 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3]) noe
         gx = std::fma(w, ux, gx);
         gy = std::fma(w, uy, gy);
         gz = std::fma(w, uz, gz);
-        const float wx = w * nx, wy = w * ny;
-        qhxx += std::fma(-wx, nx, w);
-        qhyy += std::fma(-wy, ny, w);
-        qhzz += std::fma(-w * nz, nz, w);
-        qhxy = std::fma(-wx, ny, qhxy);
-        qhxz = std::fma(-wx, nz, qhxz);
-        qhyz = std::fma(-wy, nz, qhyz);
+        add_isotropic_outer(w, -w, nx, ny, nz, qhxx, qhyy, qhzz, qhxy, qhxz, qhyz);
     }
     // Total: quadratic terms plus the springs' stretch (hxx.. so far hold inertia + the springs' projected Hessian).
     hxx += qhxx - base;

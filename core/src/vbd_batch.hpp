@@ -97,13 +97,7 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
         // A zero-length spring at its rest: Hessian k I.
         const fbatch cm = simd::select(stretched, c, simd::select(l == zero, k, zero));
         const fbatch cu = simd::select(stretched, k - c, zero);
-        const fbatch tx = cu * ux, ty = cu * uy;
-        hxx = hxx + simd::fma(tx, ux, cm);
-        hyy = hyy + simd::fma(ty, uy, cm);
-        hzz = hzz + simd::fma(cu * uz, uz, cm);
-        hxy = simd::fma(tx, uy, hxy);
-        hxz = simd::fma(tx, uz, hxz);
-        hyz = simd::fma(ty, uz, hyz);
+        add_isotropic_outer(cm, cu, ux, uy, uz, hxx, hyy, hzz, hxy, hxz, hyz);
         fbatch x0j, y0j, z0j;
         src.spring_pos(s, a.x0, a.y0, a.z0, x0j, y0j, z0j);
         const fbatch nx = x0j - x0i, ny = y0j - y0i, nz = z0j - z0i;
@@ -150,13 +144,7 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
         gx = simd::fma(wf, ux, gx);
         gy = simd::fma(wf, uy, gy);
         gz = simd::fma(wf, uz, gz);
-        const fbatch wx = wf * nx, wy = wf * ny;
-        qhxx = qhxx + simd::fnma(wx, nx, wf);
-        qhyy = qhyy + simd::fnma(wy, ny, wf);
-        qhzz = qhzz + simd::fnma(wf * nz, nz, wf);
-        qhxy = simd::fnma(wx, ny, qhxy);
-        qhxz = simd::fnma(wx, nz, qhxz);
-        qhyz = simd::fnma(wy, nz, qhyz);
+        add_isotropic_outer(wf, -wf, nx, ny, nz, qhxx, qhyy, qhzz, qhxy, qhxz, qhyz);
     }
     hxx = hxx + (qhxx - base);
     hyy = hyy + (qhyy - base);
