@@ -420,6 +420,7 @@ template <bool Parallel> bool Simulation::multilevel_guess() {
         vbd::LevelState st{L.x0.data(), L.y0.data(), L.z0.data(), L.x.data(), L.y.data(), L.z.data(),
                            L.inv_mass.data(), params_.colliders};
         st.coulomb_guess = l + 1 == is.coarse.size(); // the coarsest level starts from the inertial guess
+        st.contact_steps = params_.self_collision.thickness == 0.0f;
         L.solver.run<Parallel>(st, level_params, h, params_.air_drag);
     }
     // The cloth's guess plus the finest coarse level's correction.
@@ -606,6 +607,7 @@ template <bool Parallel> void Simulation::implicit_step() {
     vbd::LevelState st{a.x.data(), a.y.data(), a.z.data(), b.x.data(), b.y.data(), b.z.data(), inv_mass,
                        params_.colliders};
     st.coulomb_guess = !multilevel; // else the coarse levels' friction is in the guess
+    st.contact_steps = multilevel && params_.self_collision.thickness == 0.0f;
     implicit_stats_ = is.fine.run<Parallel>(st, params_.implicit, h, params_.air_drag);
     implicit_stats_.levels = multilevel ? static_cast<std::uint32_t>(1 + is.coarse.size()) : 1;
     implicit_stats_.fas = fas;
@@ -660,6 +662,7 @@ template <bool Parallel> void Simulation::implicit_contact_resolve() {
     st.plane_ny = sc_push_y_.data();
     st.plane_nz = sc_push_z_.data();
     st.plane_c = sc_plane_c_.data();
+    st.contact_steps = false; // self-collision is on
     is.fine.run<Parallel>(st, params_.implicit, params_.dt, params_.air_drag);
     implicit_velocities<Parallel>();
     ++sc_resolves_;

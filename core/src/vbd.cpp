@@ -242,10 +242,12 @@ VbdGraph finish_colouring(VbdGraph& g, const std::vector<std::uint32_t>& colour,
 
 } // namespace
 
-float contact_project(std::span<const Collider> colliders, const float p0[3], float p[3], float normal[3]) noexcept {
+float contact_project(std::span<const Collider> colliders, const float p0[3], float p[3], float normal[3],
+                      const Collider** held) noexcept {
     float mu = -1.0f;
     for (const Collider& c : colliders) {
         if (!is_inside(c, {p[0], p[1], p[2]})) continue;
+        if (held != nullptr) *held = &c;
         // Started inside, or a plane (its tangent plane at the entry point is the plane itself, so the search for
         // the entry point below would end where projecting does): the nearest surface point.
         if (c.kind == ColliderKind::plane || is_inside(c, {p0[0], p0[1], p0[2]})) {
@@ -271,6 +273,43 @@ float contact_project(std::span<const Collider> colliders, const float p0[3], fl
         }
     }
     return mu;
+}
+
+bool contact_step(const float hess[6], const float x[3], const float free_step[3], float p[3],
+                  const float normal[3]) noexcept {
+    const float nx = normal[0], ny = normal[1], nz = normal[2];
+    const float c = nx * p[0] + ny * p[1] + nz * p[2];
+    const float gap = c - (nx * free_step[0] + ny * free_step[1] + nz * free_step[2]);
+    if (!(gap > 0.0f)) return false;
+    // w = H^-1 n by the adjugate (H symmetric positive definite).
+    const float hxx = hess[0], hyy = hess[1], hzz = hess[2], hxy = hess[3], hxz = hess[4], hyz = hess[5];
+    const float c00 = hyy * hzz - hyz * hyz, c01 = hxz * hyz - hxy * hzz, c02 = hxy * hyz - hxz * hyy;
+    const float c11 = hxx * hzz - hxz * hxz, c12 = hxy * hxz - hxx * hyz, c22 = hxx * hyy - hxy * hxy;
+    const float det = hxx * c00 + hxy * c01 + hxz * c02;
+    const float wx = (c00 * nx + c01 * ny + c02 * nz) / det;
+    const float wy = (c01 * nx + c11 * ny + c12 * nz) / det;
+    const float wz = (c02 * nx + c12 * ny + c22 * nz) / det;
+    const float nw = nx * wx + ny * wy + nz * wz;
+    if (!(nw > 0.0f) || !std::isfinite(nw)) return false;
+    const float lambda = gap / nw;
+    float sx = free_step[0] + lambda * wx - x[0], sy = free_step[1] + lambda * wy - x[1],
+          sz = free_step[2] + lambda * wz - x[2];
+    // A trust region: the constrained step no longer than contact_step_reach times the free step plus the gap (a
+    // stiff spring along the normal sends H^-1 n sideways without bound).
+    const float fx = free_step[0] - x[0], fy = free_step[1] - x[1], fz = free_step[2] - x[2];
+    const float reach = contact_step_reach * (std::sqrt(fx * fx + fy * fy + fz * fz) + gap);
+    const float len = std::sqrt(sx * sx + sy * sy + sz * sz);
+    if (!std::isfinite(len)) return false;
+    if (len > reach) {
+        const float scale = reach / len;
+        sx *= scale;
+        sy *= scale;
+        sz *= scale;
+    }
+    p[0] = x[0] + sx;
+    p[1] = x[1] + sy;
+    p[2] = x[2] + sz;
+    return true;
 }
 
 namespace {
@@ -510,7 +549,7 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
         std::copy_n(y, count, c1y);
         std::copy_n(z, count, c1z);
     }
-    auto keep_out = [&](std::size_t i, std::size_t slot, float p[3]) {
+    auto keep_out = [&](std::size_t i, std::size_t slot, float p[3], const float hess[6]) {
         if (planes) { // self-contact: not closer to the partner than the plane the contact left the vertex on
             const float nx = st.plane_nx[i], ny = st.plane_ny[i], nz = st.plane_nz[i];
             const float gap = st.plane_c[i] - (nx * p[0] + ny * p[1] + nz * p[2]);
@@ -523,7 +562,31 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
         if (!colliders) return;
         const float p0[3] = {st.x0[i], st.y0[i], st.z0[i]};
         float normal[3] = {0.0f, 0.0f, 0.0f};
-        const float mu = contact_project(st.colliders, p0, p, normal);
+        const float free_step[3] = {p[0], p[1], p[2]};
+        const Collider* held = nullptr;
+        float mu = contact_project(st.colliders, p0, p, normal, &held);
+        // Only against a solid: on a plane the projection is the constrained step's normal part already, and the
+        // tangential move H^-1 n adds spread a crumpled cloth landing on the ground (a tank top's single-level
+        // steps reached strain 1.29 and were stopped).
+        if (mu >= 0.0f && held->kind != ColliderKind::plane) {
+            // The step ended inside a collider: take the local quadratic model's minimum on the contact's tangent
+            // plane instead of the free step's projection (contact_step), then keep out of every collider again.
+            const float x_now[3] = {x[slot], y[slot], z[slot]};
+            const float projected[3] = {p[0], p[1], p[2]};
+            if (st.contact_steps && contact_step(hess, x_now, free_step, p, normal)) {
+                // Not across a self-contact plane (the step along H^-1 n is tangent to the collider, not to it).
+                const bool crosses =
+                    planes && (st.plane_nx[i] != 0.0f || st.plane_ny[i] != 0.0f || st.plane_nz[i] != 0.0f) &&
+                    st.plane_c[i] - (st.plane_nx[i] * p[0] + st.plane_ny[i] * p[1] + st.plane_nz[i] * p[2]) > 0.0f;
+                float again[3] = {0.0f, 0.0f, 0.0f};
+                const float mu2 = crosses ? -1.0f : contact_project(st.colliders, p0, p, again);
+                if (crosses) std::copy_n(projected, 3, p);
+                if (mu2 >= 0.0f) {
+                    mu = mu2;
+                    std::copy_n(again, 3, normal);
+                }
+            }
+        }
         friction_from(i, slot, p, normal, std::max(mu, 0.0f));
         contact_nx_[i] = normal[0];
         contact_ny_[i] = normal[1];
@@ -552,15 +615,17 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
                         const VbdSlices& sl = *slices_;
                         const std::size_t s0 = sl.colour_slices[c] + ch * (vbd_chunk / W);
                         const std::size_t s1 = s0 + (hi - lo + W - 1) / W;
-                        alignas(64) float ox[W], oy[W], oz[W], g2[W];
+                        alignas(64) float ox[W], oy[W], oz[W], g2[W], hs[6 * W];
                         for (std::size_t slice = s0; slice < s1; ++slice) {
-                            solve_batch(args, sl, slice, ox, oy, oz, g2);
+                            solve_batch(args, sl, slice, ox, oy, oz, g2, contact ? hs : nullptr);
                             for (std::uint32_t lane = 0; lane < sl.lanes[slice]; ++lane) {
                                 const std::uint32_t i = sl.vertex[slice * W + lane];
                                 if (inv_mass[i] == 0.0f) continue;
                                 r += g2[lane];
                                 float out[3] = {ox[lane], oy[lane], oz[lane]};
-                                if (contact) keep_out(i, i, out);
+                                const float hess[6] = {hs[lane],         hs[W + lane],     hs[2 * W + lane],
+                                                       hs[3 * W + lane], hs[4 * W + lane], hs[5 * W + lane]};
+                                if (contact) keep_out(i, i, out, hess);
                                 x[i] = out[0];
                                 y[i] = out[1];
                                 z[i] = out[2];
@@ -572,9 +637,9 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
                     for (std::uint32_t k = lo; k < hi; ++k) {
                         const std::uint32_t i = graph_.colour_vertex[k];
                         if (inv_mass[i] == 0.0f) continue;
-                        float out[3];
-                        r += solve_vertex(args, i, out);
-                        if (contact) keep_out(i, i, out);
+                        float out[3], hess[6];
+                        r += solve_vertex(args, i, out, hess);
+                        if (contact) keep_out(i, i, out, hess);
                         x[i] = out[0];
                         y[i] = out[1];
                         z[i] = out[2];
@@ -588,10 +653,10 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
             for_each_index<Parallel>(chunks, [&](std::size_t ch) {
                 double r = 0.0;
                 for (std::size_t i = ch * vbd_chunk, hi = std::min(n, (ch + 1) * vbd_chunk); i < hi; ++i) {
-                    float out[3] = {x[i], y[i], z[i]};
+                    float out[3] = {x[i], y[i], z[i]}, hess[6];
                     if (inv_mass[i] != 0.0f) {
-                        r += solve_vertex(args, static_cast<std::uint32_t>(i), out);
-                        if (contact) keep_out(i, i, out);
+                        r += solve_vertex(args, static_cast<std::uint32_t>(i), out, hess);
+                        if (contact) keep_out(i, i, out, hess);
                     }
                     jac_x_[i] = out[0];
                     jac_y_[i] = out[1];

@@ -38,13 +38,14 @@ inline simd::fbatch damping_q(simd::fbatch kd, simd::fbatch inv_h, simd::fbatch 
 }
 /// The local step of simd::width vertices at once, one per lane, from a source of their state and their springs and
 /// bending rows (slot by slot; padded slots add exactly nothing). Writes the new positions and |g|^2 per lane
-/// (GradientOnly: the gradient of G at the iterate instead of the new position, as solve_vertex<true>).
+/// (GradientOnly: the gradient of G at the iterate instead of the new position, as solve_vertex<true>). `hess`
+/// (optional, 6 batches): the local Hessians the step solved with, as solve_vertex's.
 /// Sources: SliceSource below (a colour's slice, neighbours gathered) and GridSource (vbd_grid.hpp: a grid cloth in
 /// colour sub-grids, neighbours loaded contiguously). The operations and their order are those of the scalar
 /// solve_vertex (vbd.hpp), so every source gives its bits.
 template <bool GradientOnly = false, class Src>
 inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x, simd::fbatch& out_y,
-                        simd::fbatch& out_z, simd::fbatch& out_g2) noexcept {
+                        simd::fbatch& out_z, simd::fbatch& out_g2, simd::fbatch* hess = nullptr) noexcept {
     using simd::fbatch;
     using simd::fmask;
     constexpr std::size_t W = simd::width;
@@ -163,6 +164,14 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
         out_g2 = gx * gx + gy * gy + gz * gz;
         return;
     }
+    if (hess != nullptr) {
+        hess[0] = hxx;
+        hess[1] = hyy;
+        hess[2] = hzz;
+        hess[3] = hxy;
+        hess[4] = hxz;
+        hess[5] = hyz;
+    }
     const fbatch c00 = hyy * hzz - hyz * hyz, c01 = hxz * hyz - hxy * hzz, c02 = hxy * hyz - hxz * hyy;
     const fbatch c11 = hxx * hzz - hxz * hxz, c12 = hxy * hxz - hxx * hyz, c22 = hxx * hyy - hxy * hxy;
     const fbatch det = hxx * c00 + hxy * c01 + hxz * c02;
@@ -270,14 +279,17 @@ struct SliceSource {
 
 /// The local step of the slice's lanes (all of them computed; the caller writes only the live, movable ones): new
 /// positions into out_x/y/z, |g|^2 into g2 (lanes of width floats).
+/// `hess` (optional): the lanes' local Hessians, hess[c * width + lane] for component c (xx yy zz xy xz yz).
 inline void solve_batch(const SweepArgs& a, const VbdSlices& sl, std::size_t slice, float* out_x, float* out_y,
-                        float* out_z, float* g2) noexcept {
-    simd::fbatch ox, oy, oz, og;
-    solve_lanes(SliceSource(sl, *a.graph, slice), a, ox, oy, oz, og);
+                        float* out_z, float* g2, float* hess = nullptr) noexcept {
+    simd::fbatch ox, oy, oz, og, h[6];
+    solve_lanes(SliceSource(sl, *a.graph, slice), a, ox, oy, oz, og, hess != nullptr ? h : nullptr);
     ox.store_unaligned(out_x);
     oy.store_unaligned(out_y);
     oz.store_unaligned(out_z);
     og.store_unaligned(g2);
+    if (hess != nullptr)
+        for (std::size_t c = 0; c < 6; ++c) h[c].store_unaligned(hess + c * simd::width);
 }
 
 } // namespace drape::vbd

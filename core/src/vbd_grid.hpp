@@ -70,7 +70,7 @@ class GridLayout {
 
     /// Solves chunk `chunk` of colour `colour` (a fixed run of batches, so the chunks' residuals are the same for any
     /// thread count): each movable vertex's new position goes into the packed iterate, through `keep_out`
-    /// when there are colliders (keep_out(particle, cell, float[3])). Returns the chunk's sum of |g|^2 in lane order.
+    /// when there are colliders (keep_out(particle, cell, float[3], the local Hessian's 6 entries)). Returns the chunk's sum of |g|^2 in lane order.
     template <class KeepOut>
     double solve_chunk(const SweepArgs& packed, std::size_t colour, std::size_t chunk, bool contact,
                        KeepOut&& keep_out) noexcept;
@@ -168,8 +168,8 @@ double GridLayout::solve_chunk(const SweepArgs& a, std::size_t colour, std::size
     alignas(64) float g2[W];
     for (std::size_t b = b0; b < b1; ++b) {
         const std::size_t o = class_base(cls) + b * W;
-        simd::fbatch ox, oy, oz, og;
-        solve_lanes(GridSource{*this, o, sd, bd}, a, ox, oy, oz, og);
+        simd::fbatch ox, oy, oz, og, h[6];
+        solve_lanes(GridSource{*this, o, sd, bd}, a, ox, oy, oz, og, contact ? h : nullptr);
         simd::store(g2, og);
         const simd::fbatch w = simd::load(inv_mass_.data() + o);
         for (std::size_t lane = 0; lane < W; ++lane)
@@ -181,14 +181,16 @@ double GridLayout::solve_chunk(const SweepArgs& a, std::size_t colour, std::size
             simd::store(z_.data() + o, simd::select(movable, oz, simd::load(z_.data() + o)));
             continue;
         }
-        alignas(64) float lx[W], ly[W], lz[W];
+        alignas(64) float lx[W], ly[W], lz[W], lh[6][W];
         simd::store(lx, ox);
         simd::store(ly, oy);
         simd::store(lz, oz);
+        for (std::size_t c = 0; c < 6; ++c) simd::store(lh[c], h[c]);
         for (std::size_t lane = 0; lane < W; ++lane) {
             if (inv_mass_[o + lane] == 0.0f) continue;
             float out[3] = {lx[lane], ly[lane], lz[lane]};
-            keep_out(particle_[o + lane], o + lane, out);
+            const float hess[6] = {lh[0][lane], lh[1][lane], lh[2][lane], lh[3][lane], lh[4][lane], lh[5][lane]};
+            keep_out(particle_[o + lane], o + lane, out, hess);
             x_[o + lane] = out[0];
             y_[o + lane] = out[1];
             z_[o + lane] = out[2];
