@@ -662,7 +662,6 @@ template <bool Parallel> void Simulation::implicit_contact_resolve() {
     st.plane_ny = sc_push_y_.data();
     st.plane_nz = sc_push_z_.data();
     st.plane_c = sc_plane_c_.data();
-    st.contact_steps = false; // self-collision is on
     is.fine.run<Parallel>(st, params_.implicit, params_.dt, params_.air_drag);
     implicit_velocities<Parallel>();
     ++sc_resolves_;

@@ -534,6 +534,7 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     // resting on the ground bounced 3 cm, measured), so with colliders the sweeps run plain.
     const bool planes = st.plane_c != nullptr;
     const bool contact = colliders || planes;
+    const bool constrained_steps = st.contact_steps && !planes; // LevelState::contact_steps
     // With few sweeps its extrapolation is left uncorrected (chebyshev_min_iterations: plain sweeps) or cycles
     // (chebyshev_full_iterations: a smaller rho).
     const float rho = chebyshev_rho_for(ip);
@@ -572,15 +573,9 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
             // The step ended inside a collider: take the local quadratic model's minimum on the contact's tangent
             // plane instead of the free step's projection (contact_step), then keep out of every collider again.
             const float x_now[3] = {x[slot], y[slot], z[slot]};
-            const float projected[3] = {p[0], p[1], p[2]};
-            if (st.contact_steps && contact_step(hess, x_now, free_step, p, normal)) {
-                // Not across a self-contact plane (the step along H^-1 n is tangent to the collider, not to it).
-                const bool crosses =
-                    planes && (st.plane_nx[i] != 0.0f || st.plane_ny[i] != 0.0f || st.plane_nz[i] != 0.0f) &&
-                    st.plane_c[i] - (st.plane_nx[i] * p[0] + st.plane_ny[i] * p[1] + st.plane_nz[i] * p[2]) > 0.0f;
+            if (constrained_steps && contact_step(hess, x_now, free_step, p, normal)) {
                 float again[3] = {0.0f, 0.0f, 0.0f};
-                const float mu2 = crosses ? -1.0f : contact_project(st.colliders, p0, p, again);
-                if (crosses) std::copy_n(projected, 3, p);
+                const float mu2 = contact_project(st.colliders, p0, p, again);
                 if (mu2 >= 0.0f) {
                     mu = mu2;
                     std::copy_n(again, 3, normal);

@@ -53,7 +53,8 @@ struct LevelState {
     /// lose the Coulomb share of their tangential displacement before the sweeps (Solver::run).
     bool coulomb_guess = false;
     /// A local step that ends inside a solid collider (not a plane) is replaced by its minimum on the contact's
-    /// tangent plane (contact_step) rather than projected. The implicit step turns it off with self-collision (the
+    /// tangent plane (contact_step) rather than projected; never with contact planes (the step along H^-1 n is
+    /// tangent to the collider, not to them). The implicit step turns it off with self-collision (the
     /// tangential move it adds is not within the motion the self-collision stage bounds its parts by: the implicit
     /// T-shirt pushed into its back crossed itself in the armpit creases, 4-18 intersecting pairs) and on a cloth
     /// without the multilevel guess (its sweeps end far from the step's minimum, relative residual 0.17 on the tank
@@ -231,6 +232,17 @@ inline void add_isotropic_outer(T a, T b, T ux, T uy, T uz, T& xx, T& yy, T& zz,
     yz = simd::fma(ty, uz, yz);
 }
 
+/// Writes a local Hessian's six entries (xx yy zz xy xz yz) to `out` (T = float: solve_vertex; simd::fbatch:
+/// solve_lanes), for the constrained contact step (contact_step).
+template <class T> inline void write_hessian(T* out, T xx, T yy, T zz, T xy, T xz, T yz) noexcept {
+    out[0] = xx;
+    out[1] = yy;
+    out[2] = zz;
+    out[3] = xy;
+    out[4] = xz;
+    out[5] = yz;
+}
+
 /// The local Newton step of vertex i (movable): writes the new position and returns |g_i|^2 (N^2). GradientOnly:
 /// writes g_i (the gradient of G at the iterate, N) instead and takes no step. `hess` (optional): the local Hessian
 /// H_i the step solved with (xx yy zz xy xz yz), for a step constrained to a contact afterwards (Solver::run).
@@ -336,14 +348,7 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3], flo
         out[2] = gz;
         return gx * gx + gy * gy + gz * gz;
     }
-    if (hess != nullptr) {
-        hess[0] = hxx;
-        hess[1] = hyy;
-        hess[2] = hzz;
-        hess[3] = hxy;
-        hess[4] = hxz;
-        hess[5] = hyz;
-    }
+    if (hess != nullptr) write_hessian(hess, hxx, hyy, hzz, hxy, hxz, hyz);
     // x_i -= H^-1 g by the adjugate (H is symmetric positive definite: the inertia term alone is m/h^2 I).
     const float c00 = hyy * hzz - hyz * hyz, c01 = hxz * hyz - hxy * hzz, c02 = hxy * hyz - hxz * hyy;
     const float c11 = hxx * hzz - hxz * hxz, c12 = hxy * hxz - hxx * hyz, c22 = hxx * hyy - hxy * hxy;

@@ -164,14 +164,7 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
         out_g2 = gx * gx + gy * gy + gz * gz;
         return;
     }
-    if (hess != nullptr) {
-        hess[0] = hxx;
-        hess[1] = hyy;
-        hess[2] = hzz;
-        hess[3] = hxy;
-        hess[4] = hxz;
-        hess[5] = hyz;
-    }
+    if (hess != nullptr) write_hessian(hess, hxx, hyy, hzz, hxy, hxz, hyz);
     const fbatch c00 = hyy * hzz - hyz * hyz, c01 = hxz * hyz - hxy * hzz, c02 = hxy * hyz - hxz * hyy;
     const fbatch c11 = hxx * hzz - hxz * hxz, c12 = hxy * hxz - hxx * hyz, c22 = hxx * hyy - hxy * hxy;
     const fbatch det = hxx * c00 + hxy * c01 + hxz * c02;
