@@ -821,11 +821,45 @@ TEST(Implicit, SimdSweepsMatchTheScalarReferenceBitForBit) {
     auto compare = [](const Cloth& cloth, const InitialState& s, std::span<const Collider> colliders, bool grid_layout,
                       bool planes = false) {
         const std::size_t n = cloth.particle_count;
-        std::vector<float> out[4][3];
+        std::vector<float> out[5][3];
         std::vector<float> pn_x(n, 0.0f), pn_y(n, 0.0f), pn_z(n, 0.0f), pc(n, 0.0f);
-        for (std::size_t i = 0; i < n; i += 5) pn_y[i] = 1.0f, pc[i] = s.y[i];
-        // scalar, slices, grid layout (where the cloth has one); then scalar without the constrained contact steps
-        for (int mode = 0; mode < 4; ++mode) {
+        for (std::size_t i = 0; i < n; i += 5)
+            pn_y[i] = 1.0f, pc[i] = s.y[i];
+        // Against a collider without planes, triangle contact terms (vbd::TriangleTerms) on every triangle,
+        // on the first solid collider grown by 5 cm (a term is active only where its point is that near and
+        // the step breaks it).
+        const bool with_terms = !colliders.empty() && !planes;
+        const std::size_t tris = cloth.triangles.size() / 3;
+        std::vector<std::uint32_t> vt_off(n + 1, 0), vt(cloth.triangles.size());
+        for (std::uint32_t v : cloth.triangles)
+            ++vt_off[v + 1];
+        for (std::size_t i = 0; i < n; ++i)
+            vt_off[i + 1] += vt_off[i];
+        std::vector<std::uint32_t> fill(vt_off.begin(), vt_off.end() - 1);
+        for (std::uint32_t t = 0; t < tris; ++t)
+            for (int k = 0; k < 3; ++k)
+                vt[fill[cloth.triangles[3 * t + k]]++] = t;
+        std::vector<std::uint8_t> v_on(n, 1), t_on(tris, 1);
+        std::size_t solid = 0;
+        while (solid + 1 < colliders.size() && colliders[solid].kind == ColliderKind::plane)
+            ++solid;
+        std::vector<float> term;
+        for (std::size_t t = 0; t < tris; ++t)
+            term.insert(term.end(), {0.2f, 0.3f, 0.5f, 2.0e4f, 0.5f, float(solid)});
+        std::vector<Collider> grown(colliders.begin(), colliders.end());
+        for (Collider& c : grown)
+            c.thickness += 0.05f;
+        const vbd::TriangleTerms terms{cloth.triangles.data(),
+                                       vt_off.data(),
+                                       vt.data(),
+                                       v_on.data(),
+                                       t_on.data(),
+                                       term.data(),
+                                       grown,
+                                       0.05f};
+        // scalar, slices, grid layout (where the cloth has one); then scalar without the constrained contact
+        // steps, and scalar without the triangle terms
+        for (int mode = 0; mode < 5; ++mode) {
             vbd::Solver solver;
             solver.cook(cloth);
             solver.set_simd(mode == 1 || mode == 2);
@@ -847,10 +881,21 @@ TEST(Implicit, SimdSweepsMatchTheScalarReferenceBitForBit) {
                                out[mode][1].data(), out[mode][2].data(), cloth.inv_mass.data(), colliders};
             if (planes) st.plane_nx = pn_x.data(), st.plane_ny = pn_y.data(), st.plane_nz = pn_z.data(), st.plane_c = pc.data();
             st.contact_steps = mode != 3;
+            if (with_terms && mode != 4) st.triangle_terms = &terms;
             solver.run<false>(st, ip, h, 0.2f);
         }
-        // The sphere's case takes constrained contact steps (vbd::contact_step), so they are among the bits compared;
-        // never with contact planes.
+        // The terms act where the grids meet the sphere, so they are among the bits compared (the T-shirt
+        // starts clear of its body by more than their reach).
+        std::size_t termed = 0;
+        for (std::size_t i = 0; i < n; ++i)
+            termed += out[0][1][i] != out[4][1][i];
+        if (with_terms && grid_layout) {
+            EXPECT_GT(termed, 0u) << "no triangle term acted";
+        } else if (!with_terms) {
+            EXPECT_EQ(termed, 0u);
+        }
+        // The sphere's case takes constrained contact steps (vbd::contact_step), so they are among the bits
+        // compared; never with contact planes.
         std::size_t constrained = 0;
         for (std::size_t i = 0; i < n; ++i) constrained += out[0][0][i] != out[3][0][i] || out[0][2][i] != out[3][2][i];
         if (!colliders.empty() && !planes) {

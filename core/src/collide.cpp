@@ -20,6 +20,7 @@
 
 #include "drape/simulation.hpp"
 #include "drape/triangle_contact.hpp"
+#include "triangle_contact_search.hpp"
 
 namespace drape {
 
@@ -101,7 +102,9 @@ void Simulation::cook_triangle_contact() {
         tri_in_contact_.assign(tris, 0);
         clearance_.assign(n, 0.0f);
     }
-    if (core_measure_.size() != n * params_.colliders.size()) core_measure_.assign(n * params_.colliders.size(), 0.0f);
+    cook_triangle_terms();
+    if (core_measure_.size() != n * params_.colliders.size())
+        core_measure_.assign(n * params_.colliders.size(), 0.0f);
 }
 
 template <bool Parallel>
@@ -121,24 +124,13 @@ std::size_t Simulation::collide_triangles(float* x, float* y, float* z, float* v
     if (core_measure_.size() != n * colliders.size()) cook_triangle_contact(); // not expected: set_params cooks
     float* clear = clearance_.data();
     float* measure = core_measure_.data();
-    const std::size_t cols = colliders.size();
-    constexpr float inside_slack = 1e-5f; // m: a projected particle's float rounding
     std::size_t applied = 0; // contacts applied, over the rounds
     for (int round = 0; round < rounds; ++round) {
         std::atomic<std::size_t> contacts{0};
         // Per particle: a lower bound of its distance to the nearest collider (planes aside).
         auto bound = [&](std::size_t blk) {
             const std::size_t begin = blk * block_particles, end = std::min(begin + block_particles, n);
-            for (std::size_t i = begin; i < end; ++i) clear[i] = std::numeric_limits<float>::max();
-            for (std::size_t k = 0; k < cols; ++k) {
-                const Collider& col = colliders[k];
-                if (col.kind == ColliderKind::plane) continue;
-                float* m = measure + k * n;
-                for (std::size_t i = begin; i < end; ++i) {
-                    m[i] = core_measure(col, {x[i], y[i], z[i]});
-                    clear[i] = std::min(clear[i], clearance_from_measure(col, m[i]));
-                }
-            }
+            detail::triangle_contact_bounds(colliders, n, x, y, z, clear, measure, begin, end);
         };
         // Per triangle: its deepest contact over the colliders, and what it asks of its vertices.
         auto find = [&](std::size_t blk) {
@@ -148,31 +140,10 @@ std::size_t Simulation::collide_triangles(float* x, float* y, float* z, float* v
                 tri_in_contact_[t] = 0;
                 const std::uint32_t i[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
                 if (w[i[0]] == 0.0f && w[i[1]] == 0.0f && w[i[2]] == 0.0f) continue;
-                // A vertex still inside after the particle pass was held there (a cloth started inside a solid, or
-                // overlapping colliders disagree): its triangles are left alone, as the particle pass leaves it.
-                if (std::min({clear[i[0]], clear[i[1]], clear[i[2]]}) < -inside_slack) continue;
-                // Rejected when a vertex is farther from every collider than the longest edge is long (the distance
-                // is 1-Lipschitz: triangle_contact.hpp), then collider by collider the same way.
-                auto len2 = [&](std::uint32_t p, std::uint32_t q) {
-                    const float ex = x[p] - x[q], ey = y[p] - y[q], ez = z[p] - z[q];
-                    return ex * ex + ey * ey + ez * ez;
-                };
-                const float far = std::max({clear[i[0]], clear[i[1]], clear[i[2]]});
-                const float longest2 = std::max({len2(i[0], i[1]), len2(i[1], i[2]), len2(i[2], i[0])});
-                if (far > 0.0f && far * far >= longest2) continue;
-                const Vec3f p[3] = {{x[i[0]], y[i[0]], z[i[0]]}, {x[i[1]], y[i[1]], z[i[1]]},
-                                    {x[i[2]], y[i[2]], z[i[2]]}};
-                const float radius2 = enclosing_radius2(p[0], p[1], p[2]);
                 TriangleContact best;
                 float mu = 0.0f;
-                for (std::size_t k = 0; k < cols; ++k) {
-                    const Collider& col = colliders[k];
-                    const float* m = measure + k * n;
-                    if (triangle_clear_of(col, m[i[0]], m[i[1]], m[i[2]], radius2)) continue;
-                    const TriangleContact c = triangle_contact(col, p[0], p[1], p[2]);
-                    if (c.inside && (!best.inside || c.depth > best.depth)) best = c, mu = col.friction;
-                }
-                if (!best.inside) continue;
+                if (!detail::deepest_triangle_contact(colliders, n, i, x, y, z, clear, measure, best, mu))
+                    continue;
                 const float* b = best.barycentric.data();
                 const float sum = b[0] * b[0] * w[i[0]] + b[1] * b[1] * w[i[1]] + b[2] * b[2] * w[i[2]];
                 if (!(sum > 0.0f)) continue;

@@ -608,6 +608,17 @@ template <bool Parallel> void Simulation::implicit_step() {
                        params_.colliders};
     st.coulomb_guess = !multilevel; // else the coarse levels' friction is in the guess
     st.contact_steps = multilevel && params_.self_collision.thickness == 0.0f;
+    // Triangles near a solid collider at the step's start (x^n, clear of the colliders; the guess may be
+    // inside them): their contact enters the sweeps (implicit_triangle_contact.cpp), where the constrained
+    // steps are on.
+    vbd::TriangleTerms terms;
+    if (st.contact_steps && implicit_triangle_terms<Parallel>(a.x.data(), a.y.data(), a.z.data())) {
+        terms = {cloth_.triangles.data(), vertex_tri_offsets_.data(),
+                 vertex_tris_.data(),     tt_vertex_on_.data(),
+                 tt_on_.data(),           tt_term_.data(),
+                 tt_colliders_,           tt_reach_};
+        st.triangle_terms = &terms;
+    }
     implicit_stats_ = is.fine.run<Parallel>(st, params_.implicit, h, params_.air_drag);
     implicit_stats_.levels = multilevel ? static_cast<std::uint32_t>(1 + is.coarse.size()) : 1;
     implicit_stats_.fas = fas;

@@ -275,20 +275,104 @@ float contact_project(std::span<const Collider> colliders, const float p0[3], fl
     return mu;
 }
 
+bool solve_sym3(const float hess[6], const float r[3], float out[3]) noexcept {
+    const float hxx = hess[0], hyy = hess[1], hzz = hess[2], hxy = hess[3], hxz = hess[4], hyz = hess[5];
+    const float c00 = hyy * hzz - hyz * hyz, c01 = hxz * hyz - hxy * hzz, c02 = hxy * hyz - hxz * hyy;
+    const float c11 = hxx * hzz - hxz * hxz, c12 = hxy * hxz - hxx * hyz, c22 = hxx * hyy - hxy * hxy;
+    const float det = hxx * c00 + hxy * c01 + hxz * c02;
+    if (!(det > 0.0f) || !std::isfinite(det)) return false;
+    out[0] = (c00 * r[0] + c01 * r[1] + c02 * r[2]) / det;
+    out[1] = (c01 * r[0] + c11 * r[1] + c12 * r[2]) / det;
+    out[2] = (c02 * r[0] + c12 * r[1] + c22 * r[2]) / det;
+    return true;
+}
+
+bool triangle_terms_step(const TriangleTerms& terms, std::uint32_t i, const float* x, const float* y,
+                         const float* z, const std::uint32_t* slot, const float* x0, const float* y0,
+                         const float* z0, float eps, const float x_now[3], float p[3],
+                         float hess[6]) noexcept {
+    // The model's gradient at x_now: H (x_now - p).
+    const float dx = x_now[0] - p[0], dy = x_now[1] - p[1], dz = x_now[2] - p[2];
+    float g[3] = {hess[0] * dx + hess[3] * dy + hess[4] * dz, hess[3] * dx + hess[1] * dy + hess[5] * dz,
+                  hess[4] * dx + hess[5] * dy + hess[2] * dz};
+    float ht[6] = {hess[0], hess[1], hess[2], hess[3], hess[4], hess[5]};
+    bool active = false;
+    for (std::uint32_t k = terms.vertex_tri_offsets[i]; k < terms.vertex_tri_offsets[i + 1]; ++k) {
+        const std::uint32_t t = terms.vertex_tris[k];
+        if (!terms.tri_on[t]) continue;
+        const float* e = terms.term + std::size_t(t) * triangle_term_floats;
+        const std::uint32_t* v = terms.triangles + 3 * std::size_t(t);
+        const float kc = e[3], mu = e[4];
+        const Collider& col = terms.grown[static_cast<std::size_t>(e[5])];
+        // The contact point q with vertex i at x_now, and its move over the step, q - q^n; the weight of
+        // vertex i.
+        float q[3] = {0.0f, 0.0f, 0.0f}, u[3] = {0.0f, 0.0f, 0.0f}, bi = 0.0f;
+        for (int j = 0; j < 3; ++j) {
+            const std::uint32_t vj = v[j];
+            const std::size_t s = slot ? slot[vj] : vj;
+            const float pj[3] = {vj == i ? x_now[0] : x[s], vj == i ? x_now[1] : y[s],
+                                 vj == i ? x_now[2] : z[s]};
+            if (vj == i) bi = e[j];
+            q[0] += e[j] * pj[0];
+            q[1] += e[j] * pj[1];
+            q[2] += e[j] * pj[2];
+            u[0] += e[j] * (pj[0] - x0[vj]);
+            u[1] += e[j] * (pj[1] - y0[vj]);
+            u[2] += e[j] * (pj[2] - z0[vj]);
+        }
+        // phi(q) and its normal: q farther than the reach from the inflated surface has no contact.
+        const Contact proj = project_point(col, {q[0], q[1], q[2]});
+        if (!proj.inside) continue;
+        const float nx = proj.normal[0], ny = proj.normal[1], nz = proj.normal[2];
+        const float a = terms.reach - ((proj.point[0] - q[0]) * nx + (proj.point[1] - q[1]) * ny +
+                                       (proj.point[2] - q[2]) * nz);
+        const float a_free = a - bi * (nx * dx + ny * dy + nz * dz);
+        if (!(a_free < 0.0f) || !(bi > 0.0f)) continue;
+        active = true;
+        const float gs = kc * a * bi, hs = kc * bi * bi;
+        add_isotropic_outer(0.0f, hs, nx, ny, nz, ht[0], ht[1], ht[2], ht[3], ht[4], ht[5]);
+        g[0] += gs * nx;
+        g[1] += gs * ny;
+        g[2] += gs * nz;
+        // Friction on the contact point (vertex friction's smoothed Coulomb model, vbd_batch.hpp): the normal
+        // force lambda = k max(0, -a) against the tangential move u_T of the step, mu lambda u_T / max(|u_T|,
+        // eps), shared by b_i; its Hessian b_i^2 mu lambda / max(|u_T|, eps) (I - n n^T).
+        const float lambda = kc * std::max(-a, 0.0f);
+        if (!(mu > 0.0f) || !(lambda > 0.0f)) continue;
+        const float un = u[0] * nx + u[1] * ny + u[2] * nz;
+        const float ut[3] = {u[0] - un * nx, u[1] - un * ny, u[2] - un * nz};
+        const float len = std::sqrt(ut[0] * ut[0] + ut[1] * ut[1] + ut[2] * ut[2]);
+        const float f = mu * lambda / std::max(len, eps);
+        g[0] += bi * f * ut[0];
+        g[1] += bi * f * ut[1];
+        g[2] += bi * f * ut[2];
+        const float hf = bi * bi * f;
+        add_isotropic_outer(hf, -hf, nx, ny, nz, ht[0], ht[1], ht[2], ht[3], ht[4], ht[5]);
+    }
+    if (!active) return false;
+    float step[3];
+    if (!solve_sym3(ht, g, step)) return false;
+    for (int c = 0; c < 3; ++c) {
+        if (!std::isfinite(step[c])) return false;
+    }
+    for (int c = 0; c < 3; ++c) {
+        p[c] = x_now[c] - step[c];
+        hess[c] = ht[c];
+        hess[3 + c] = ht[3 + c];
+    }
+    return true;
+}
+
 bool contact_step(const float hess[6], const float x[3], const float free_step[3], float p[3],
                   const float normal[3]) noexcept {
     const float nx = normal[0], ny = normal[1], nz = normal[2];
     const float c = nx * p[0] + ny * p[1] + nz * p[2];
     const float gap = c - (nx * free_step[0] + ny * free_step[1] + nz * free_step[2]);
     if (!(gap > 0.0f)) return false;
-    // w = H^-1 n by the adjugate (H symmetric positive definite).
-    const float hxx = hess[0], hyy = hess[1], hzz = hess[2], hxy = hess[3], hxz = hess[4], hyz = hess[5];
-    const float c00 = hyy * hzz - hyz * hyz, c01 = hxz * hyz - hxy * hzz, c02 = hxy * hyz - hxz * hyy;
-    const float c11 = hxx * hzz - hxz * hxz, c12 = hxy * hxz - hxx * hyz, c22 = hxx * hyy - hxy * hxy;
-    const float det = hxx * c00 + hxy * c01 + hxz * c02;
-    const float wx = (c00 * nx + c01 * ny + c02 * nz) / det;
-    const float wy = (c01 * nx + c11 * ny + c12 * nz) / det;
-    const float wz = (c02 * nx + c12 * ny + c22 * nz) / det;
+    // w = H^-1 n (H symmetric positive definite).
+    float w[3];
+    if (!solve_sym3(hess, normal, w)) return false;
+    const float wx = w[0], wy = w[1], wz = w[2];
     const float nw = nx * wx + ny * wy + nz * wz;
     if (!(nw > 0.0f) || !std::isfinite(nw)) return false;
     const float lambda = gap / nw;
@@ -550,7 +634,17 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
         std::copy_n(y, count, c1y);
         std::copy_n(z, count, c1z);
     }
-    auto keep_out = [&](std::size_t i, std::size_t slot, float p[3], const float hess[6]) {
+    const std::uint32_t* cell_of = grid ? grid_->cell_of_data() : nullptr;
+    auto keep_out = [&](std::size_t i, std::size_t slot, float p[3], const float* hess) {
+        // The triangles' contact terms first: the step they give is then the free step below.
+        float terms_hess[6];
+        if (st.triangle_terms && st.triangle_terms->vertex_on[i]) {
+            const float x_now[3] = {x[slot], y[slot], z[slot]};
+            std::copy_n(hess, 6, terms_hess);
+            if (triangle_terms_step(*st.triangle_terms, static_cast<std::uint32_t>(i), x, y, z, cell_of,
+                                    st.x0, st.y0, st.z0, args.fr_eps, x_now, p, terms_hess))
+                hess = terms_hess;
+        }
         if (planes) { // self-contact: not closer to the partner than the plane the contact left the vertex on
             const float nx = st.plane_nx[i], ny = st.plane_ny[i], nz = st.plane_nz[i];
             const float gap = st.plane_c[i] - (nx * p[0] + ny * p[1] + nz * p[2]);

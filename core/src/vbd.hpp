@@ -32,6 +32,45 @@ std::vector<std::uint32_t> mirror_twins(std::span<const float> x, std::span<cons
 /// Refreshes the springs' k and kd from the cloth's materials (after Simulation::set_material).
 void refresh_materials(VbdGraph& graph, const Cloth& cloth);
 
+/// Triangle contact terms inside the sweeps (docs/implicit.md, "Triangle contact inside the solve"): per
+/// triangle of the cloth that came within a search reach of a solid collider's inflated surface at the step's
+/// start, the barycentric weights b of its deepest point then (a material point q = sum b_j x_j), which
+/// collider, a stiffness k (N/m) and that collider's friction mu. The energy k / 2 min(0, phi(q))^2, phi the
+/// signed distance of q to the collider's inflated surface, and Coulomb friction on q's tangential move over
+/// the step, enter the local step of each of the triangle's vertices (triangle_terms_step).
+struct TriangleTerms {
+    const std::uint32_t* triangles = nullptr;          ///< 3 particles per triangle
+    const std::uint32_t* vertex_tri_offsets = nullptr; ///< CSR: each particle's triangles
+    const std::uint32_t* vertex_tris = nullptr;
+    const std::uint8_t* vertex_on = nullptr; ///< per particle: one of its triangles has a term
+    const std::uint8_t* tri_on = nullptr;    ///< per triangle: it has a term
+    const float* term = nullptr; ///< per triangle, triangle_term_floats floats: b0 b1 b2 k mu collider
+    /// The colliders grown by `reach` beyond their thickness: phi(q) = reach - the depth of q in the grown
+    /// one (the real inflated surface and the grown one are parallel: both are the solid grown by a ball).
+    std::span<const Collider> grown;
+    float reach = 0.0f; ///< m
+};
+inline constexpr std::size_t triangle_term_floats = 6;
+
+/// out = H^-1 r for a symmetric 3x3 H (xx yy zz xy xz yz) by its adjugate; false when the determinant is not
+/// a positive finite number (out then unchanged).
+bool solve_sym3(const float hess[6], const float r[3], float out[3]) noexcept;
+
+/// The local step of vertex i with its triangles' contact terms (TriangleTerms). The free step p minimises
+/// the local quadratic model with Hessian hess about x_now (its gradient there is hess (x_now - p)). Each
+/// term's constraint phi(q) >= 0 is linearised at x_now (q with vertex i at x_now: phi and the outward normal
+/// n there, from the grown collider's projection); a term the free step breaks (phi + b_i n . (p - x_now) <
+/// 0) is added to the model (gradient k phi b_i n, Hessian k b_i^2 n n^T) with its friction: the normal force
+/// lambda = k max(0, -phi) against q's tangential move u_T since x^n (x0, y0, z0), gradient b_i mu lambda u_T
+/// / max(|u_T|, eps), Hessian b_i^2 mu lambda / max(|u_T|, eps) (I - n n^T) (the vertices' own smoothed
+/// Coulomb model, eps a slip distance); p becomes that model's minimum. The triangle's other vertices are
+/// read from x, y, z at slot[j] (slot null: at j); x0, y0, z0 are indexed by particle. Returns false (p and
+/// hess unchanged) when no term is active; else writes p and adds the terms' Hessians to hess.
+bool triangle_terms_step(const TriangleTerms& terms, std::uint32_t i, const float* x, const float* y,
+                         const float* z, const std::uint32_t* slot, const float* x0, const float* y0,
+                         const float* z0, float eps, const float x_now[3], float p[3],
+                         float hess[6]) noexcept;
+
 /// The arrays one level's sweeps work on (particle_count entries each).
 struct LevelState {
     const float* x0; ///< x^n
@@ -60,6 +99,8 @@ struct LevelState {
     /// without the multilevel guess (its sweeps end far from the step's minimum, relative residual 0.17 on the tank
     /// top, and with them the tank top on its body blew up at 0.8 s against its 10 % strain limit).
     bool contact_steps = true;
+    /// Optional triangle contact terms (TriangleTerms; vertex indices are the cloth's). Null: none.
+    const TriangleTerms* triangle_terms = nullptr;
 };
 
 /// Contact inside the sweeps: if p is inside a collider (its inflated solid, colliders.hpp), moves it onto the tangent

@@ -47,6 +47,7 @@ class GridLayout {
     std::size_t chunks_per_colour() const noexcept { return chunks_; }
     /// The cell of particle i.
     std::size_t cell_of(std::size_t i) const noexcept { return cell_of_[i]; }
+    const std::uint32_t* cell_of_data() const noexcept { return cell_of_.data(); }
     std::size_t spring_slots() const noexcept { return spring_dir_.size(); }
     std::size_t bend_slots() const noexcept { return bend_dir_.size(); }
     std::uint32_t period() const noexcept { return period_; }

@@ -417,6 +417,15 @@ class Simulation {
     std::vector<float> core_measure_; ///< per collider, per particle: core_measure (triangle_contact.hpp)
     void cook_triangle_contact();
     void cook_vertex_triangles();
+    /// The implicit solver's triangle contact terms for this step (implicit_triangle_contact.cpp;
+    /// vbd::TriangleTerms): found at positions x, y, z (the step's start, x^n); false when no triangle has one.
+    template <bool Parallel> bool implicit_triangle_terms(const float* x, const float* y, const float* z);
+    void cook_triangle_terms();
+    std::vector<std::uint8_t> tt_on_;        ///< per triangle: it has a term
+    std::vector<std::uint8_t> tt_vertex_on_; ///< per particle: one of its triangles has a term
+    std::vector<float> tt_term_;         ///< per triangle: vbd::triangle_term_floats floats
+    std::vector<Collider> tt_colliders_; ///< the colliders grown by the terms' search reach
+    float tt_reach_ = 0.0f;              ///< that reach, m
     // Self-collision (self_collide.cpp; cooked when first enabled): the cloth's unique edges, its patches, per round
     // the boxes of every triangle and edge (in patch order), each patch's box and cone of normals and a spatial hash
     // of the patches (counting sort into buckets: sizes fixed at cooking, at most 8 cells per patch), and per particle
