@@ -839,13 +839,13 @@ TEST(Implicit, SimdSweepsMatchTheScalarReferenceBitForBit) {
         for (std::uint32_t t = 0; t < tris; ++t)
             for (int k = 0; k < 3; ++k)
                 vt[fill[cloth.triangles[3 * t + k]]++] = t;
-        std::vector<std::uint8_t> v_on(n, 1), t_on(tris, 1);
         std::size_t solid = 0;
         while (solid + 1 < colliders.size() && colliders[solid].kind == ColliderKind::plane)
             ++solid;
+        std::vector<std::uint8_t> v_on(n, 1), t_on(tris, static_cast<std::uint8_t>(solid + 1));
         std::vector<float> term;
         for (std::size_t t = 0; t < tris; ++t)
-            term.insert(term.end(), {0.2f, 0.3f, 0.5f, 2.0e4f, 0.5f, float(solid)});
+            term.insert(term.end(), {0.2f, 0.3f, 0.5f, 2.0e4f, 0.5f});
         std::vector<Collider> grown(colliders.begin(), colliders.end());
         for (Collider& c : grown)
             c.thickness += 0.05f;

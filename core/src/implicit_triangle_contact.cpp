@@ -100,8 +100,7 @@ bool Simulation::implicit_triangle_terms(const float* x, const float* y, const f
             e[2] = b[2];
             e[3] = triangle_term_stiffness * std::max({stiffness(v[0]), stiffness(v[1]), stiffness(v[2])});
             e[4] = mu;
-            e[5] = static_cast<float>(k);
-            on[t] = 1;
+            on[t] = static_cast<std::uint8_t>(k + 1); // at most 64 colliders (check_params)
         }
     });
     for_each_index<Parallel>((n + block_particles - 1) / block_particles, [&](std::size_t blk) {
@@ -109,11 +108,11 @@ bool Simulation::implicit_triangle_terms(const float* x, const float* y, const f
              ++i) {
             std::uint8_t f = 0;
             for (std::uint32_t k = vertex_tri_offsets_[i]; k < vertex_tri_offsets_[i + 1]; ++k)
-                f |= on[vertex_tris_[k]];
+                f |= on[vertex_tris_[k]] != 0;
             tt_vertex_on_[i] = f;
         }
     });
-    return std::find(on.begin(), on.end(), std::uint8_t{1}) != on.end();
+    return std::any_of(on.begin(), on.end(), [](std::uint8_t c) { return c != 0; });
 }
 
 template bool Simulation::implicit_triangle_terms<true>(const float*, const float*, const float*);

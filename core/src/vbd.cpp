@@ -303,7 +303,7 @@ bool triangle_terms_step(const TriangleTerms& terms, std::uint32_t i, const floa
         const float* e = terms.term + std::size_t(t) * triangle_term_floats;
         const std::uint32_t* v = terms.triangles + 3 * std::size_t(t);
         const float kc = e[3], mu = e[4];
-        const Collider& col = terms.grown[static_cast<std::size_t>(e[5])];
+        const Collider& col = terms.grown[terms.tri_on[t] - 1u];
         // The contact point q with vertex i at x_now, and its move over the step, q - q^n; the weight of
         // vertex i.
         float q[3] = {0.0f, 0.0f, 0.0f}, u[3] = {0.0f, 0.0f, 0.0f}, bi = 0.0f;

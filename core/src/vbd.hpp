@@ -43,14 +43,14 @@ struct TriangleTerms {
     const std::uint32_t* vertex_tri_offsets = nullptr; ///< CSR: each particle's triangles
     const std::uint32_t* vertex_tris = nullptr;
     const std::uint8_t* vertex_on = nullptr; ///< per particle: one of its triangles has a term
-    const std::uint8_t* tri_on = nullptr;    ///< per triangle: it has a term
-    const float* term = nullptr; ///< per triangle, triangle_term_floats floats: b0 b1 b2 k mu collider
+    const std::uint8_t* tri_on = nullptr;    ///< per triangle: 0 no term, else its collider's index + 1
+    const float* term = nullptr;             ///< per triangle, triangle_term_floats floats: b0 b1 b2 k mu
     /// The colliders grown by `reach` beyond their thickness: phi(q) = reach - the depth of q in the grown
     /// one (the real inflated surface and the grown one are parallel: both are the solid grown by a ball).
     std::span<const Collider> grown;
     float reach = 0.0f; ///< m
 };
-inline constexpr std::size_t triangle_term_floats = 6;
+inline constexpr std::size_t triangle_term_floats = 5;
 
 /// out = H^-1 r for a symmetric 3x3 H (xx yy zz xy xz yz) by its adjugate; false when the determinant is not
 /// a positive finite number (out then unchanged).
