@@ -242,19 +242,9 @@ const char* fas_at_rest_excluded_by(const SimulationParams& p) noexcept {
                                                : nullptr;
 }
 
-/// ImplicitParams::fas_at_rest: whether this step's coarse levels solve with FAS because the cloth is at rest.
-template <bool Parallel> bool Simulation::fas_at_rest() {
+/// Block sums added in block order: the same bits at any worker count.
+template <bool Parallel> double Simulation::rms_speed() {
     ImplicitSolver& is = *implicit_;
-    const std::array<float, 3> g = gravity_now();
-    const double gh = std::sqrt(double(g[0]) * g[0] + double(g[1]) * g[1] + double(g[2]) * g[2]) * params_.dt;
-    if (!params_.implicit.fas_at_rest || fas_at_rest_excluded_by(params_) != nullptr || grabbed_ != SIZE_MAX ||
-        !(gh > 0.0)) {
-        is.slow_steps = 0;
-        return is.at_rest = false;
-    }
-    // The root mean square speed over the particles, fixed ones counting as still (block sums added in block order:
-    // the same bits at any worker count). Not the fastest particle: at N = 316 a few next to the clips kept 0.18 m/s
-    // at rest (the plain guess's drift against the strain limit), which held FAS off for good.
     const StateBuffer& a = buffers_[current_];
     const std::size_t n = cloth_.particle_count;
     for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
@@ -266,7 +256,22 @@ template <bool Parallel> bool Simulation::fas_at_rest() {
     });
     double sum = 0.0;
     for (double m : is.block_dot) sum += m;
-    const double v = std::sqrt(sum / double(std::max<std::size_t>(1, n))) / gh;
+    return std::sqrt(sum / double(std::max<std::size_t>(1, n)));
+}
+
+/// ImplicitParams::fas_at_rest: whether this step's coarse levels solve with FAS because the cloth is at rest.
+template <bool Parallel> bool Simulation::fas_at_rest() {
+    ImplicitSolver& is = *implicit_;
+    const std::array<float, 3> g = gravity_now();
+    const double gh = std::sqrt(double(g[0]) * g[0] + double(g[1]) * g[1] + double(g[2]) * g[2]) * params_.dt;
+    if (!params_.implicit.fas_at_rest || fas_at_rest_excluded_by(params_) != nullptr || grabbed_ != SIZE_MAX ||
+        !(gh > 0.0)) {
+        is.slow_steps = 0;
+        return is.at_rest = false;
+    }
+    // The root mean square speed, not the fastest particle: at N = 316 a few next to the clips kept 0.18 m/s at rest
+    // (the plain guess's drift against the strain limit), which held FAS off for good.
+    const double v = rms_speed<Parallel>() / gh;
     const double on = double(fas_rest_on) * is.rest_scale;
     if (!is.at_rest) {
         is.slow_steps = v < on ? is.slow_steps + 1 : 0;
@@ -526,19 +531,9 @@ template <bool Parallel> void Simulation::implicit_step() {
                     }
             }
     }
-    // At rest (guess_rest_speed): the root mean square speed over the particles, fixed ones counting as still, block
-    // sums added in block order (the same bits at any worker count).
+    // At rest (guess_rest_speed).
     if (g2 > 0.0f) {
-        for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
-            double m = 0.0;
-            for (std::size_t i = blk * block_particles, end = std::min(n, (blk + 1) * block_particles); i < end; ++i)
-                if (inv_mass[i] != 0.0f)
-                    m += double(a.u[i]) * a.u[i] + double(a.v[i]) * a.v[i] + double(a.w[i]) * a.w[i];
-            is.block_dot[blk] = m;
-        });
-        double sum = 0.0;
-        for (double m : is.block_dot) sum += m;
-        const double v = std::sqrt(sum / double(std::max<std::size_t>(1, n))) / (std::sqrt(double(g2)) * h);
+        const double v = rms_speed<Parallel>() / (std::sqrt(double(g2)) * h);
         is.guess_slow_steps = v < guess_rest_speed && !fresh ? is.guess_slow_steps + 1 : 0;
     }
     // Not under FAS (the option, or FAS at rest acting since the last step): its coarse levels hold the rest already,

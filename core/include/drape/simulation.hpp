@@ -320,6 +320,8 @@ class Simulation {
     void cook_implicit();
     template <bool Parallel> bool multilevel_guess();
     template <bool Parallel> bool fas_at_rest();
+    /// The root mean square speed of the current state over all particles (fixed ones count as still), m/s.
+    template <bool Parallel> double rms_speed();
     /// The implicit step's contact re-solve: the step's sweeps again from where self-collision left the cloth, each
     /// pushed particle held on its side of its contact plane, then the velocities (implicit_step.cpp).
     template <bool Parallel> void implicit_contact_resolve();
