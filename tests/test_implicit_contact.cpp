@@ -148,7 +148,8 @@ TEST(ImplicitContact, AFrictionlessDrapeOverADiscRimIsNotStretched) {
 // every step, the sweeps' unconverged remainder fed back through it and the cloth, at rest, gained kinetic energy step
 // by step and slid off the disc (measured over 3 s: up to 1.1e-3 J, a particle 331 mm from its start); with no gravity
 // in the guess once the cloth is slow (implicit_step.cpp, guess_rest_speed) 1.1e-6 J and 37.8 mm (the first ten steps,
-// before the rest test, and a hem fold settling; docs/implicit.md, "The guess at rest"). Left out under the sanitizers (the explicit drape costs minutes there).
+// before the rest test, and a hem fold settling; docs/implicit.md, "The guess at rest"). Left out under the
+// sanitizers (the explicit drape costs minutes there).
 TEST(ImplicitContact, TheDrapeAtRestStaysAtRest) {
     if (drape::testing::sanitized) GTEST_SKIP() << "the explicit drape takes minutes under the sanitizers";
     SceneSpec spec = load_scene("drape");

@@ -49,6 +49,7 @@ struct ImplicitSolver {
     std::vector<std::uint8_t> piece_held;
     std::uint32_t slow_steps = 0; ///< steps in a row with an rms speed below the bound to start FAS at rest
     std::uint32_t guess_slow_steps = 0; ///< steps in a row with an rms speed below guess_rest_speed (implicit_step.cpp)
+    double rms_speed = 0.0;             ///< this step's at x^n (m/s): the guess's rest test and FAS at rest's
     bool at_rest = false;         ///< ImplicitParams::fas_at_rest engaged
     std::uint32_t rest_steps = 0; ///< steps since FAS at rest started
     float rest_scale = 1.0f;      ///< the bound to start FAS at rest is fas_rest_on x this (halved when FAS fed motion)

@@ -128,9 +128,10 @@ void transfer_transpose(const LevelTransfer& t, const float* src, float* out, st
 /// sweeps' unconverged remainder as acceleration, took that share of gravity into its next guess, kept part of it after
 /// the sweeps and read more the next step: the cotton drape at rest on the disc (the explicit solver's equilibrium,
 /// N = 34) gained kinetic energy e-fold every ~0.3 s on one level at 30 sweeps (3e-7 J at 0.5 s, 9e-5 J at 2.9 s) and
-/// its drape coefficient fell from 0.29 to 0.11 (docs/implicit.md, "The guess at rest"). The bounds are FAS at rest's.
-constexpr double guess_rest_speed = 0.15;
-constexpr std::uint32_t guess_rest_steps = 10;
+/// its drape coefficient fell from 0.29 to 0.11 (docs/implicit.md, "The guess at rest"). The bounds are FAS at rest's
+/// (fas_rest_on, fas_rest_steps).
+constexpr double guess_rest_speed = fas_rest_on;
+constexpr std::uint32_t guess_rest_steps = fas_rest_steps;
 
 } // namespace
 
@@ -269,9 +270,9 @@ template <bool Parallel> bool Simulation::fas_at_rest() {
         is.slow_steps = 0;
         return is.at_rest = false;
     }
-    // The root mean square speed, not the fastest particle: at N = 316 a few next to the clips kept 0.18 m/s at rest
-    // (the plain guess's drift against the strain limit), which held FAS off for good.
-    const double v = rms_speed<Parallel>() / gh;
+    // The root mean square speed (implicit_step took it this step), not the fastest particle: at N = 316 a few next to
+    // the clips kept 0.18 m/s at rest (the plain guess's drift against the strain limit), which held FAS off for good.
+    const double v = is.rms_speed / gh;
     const double on = double(fas_rest_on) * is.rest_scale;
     if (!is.at_rest) {
         is.slow_steps = v < on ? is.slow_steps + 1 : 0;
@@ -531,9 +532,10 @@ template <bool Parallel> void Simulation::implicit_step() {
                     }
             }
     }
-    // At rest (guess_rest_speed).
+    // At rest (guess_rest_speed); the speed is kept for FAS at rest (multilevel_guess).
+    is.rms_speed = rms_speed<Parallel>();
     if (g2 > 0.0f) {
-        const double v = rms_speed<Parallel>() / (std::sqrt(double(g2)) * h);
+        const double v = is.rms_speed / (std::sqrt(double(g2)) * h);
         is.guess_slow_steps = v < guess_rest_speed && !fresh ? is.guess_slow_steps + 1 : 0;
     }
     // Not under FAS (the option, or FAS at rest acting since the last step): its coarse levels hold the rest already,
