@@ -573,7 +573,7 @@ TEST(SelfCollision, ContactSubStepsRunTheStepsSweepsSingleLevelWhenCrowded) {
         pile.params.implicit.tolerance = 0.0f;
         Simulation sim(std::move(pile.scene.cloth), pile.scene.initial, pile.params);
         std::uint32_t single = 0, alone = 0;
-        for (int s = 0; s < 12; ++s) {
+        for (int s = 0; s < 24; ++s) { // the top layer lands after ~0.07 s (22 mm from the bottom one, 4 mm apart)
             const std::size_t before = sim.self_collision_substepped();
             sim.step(1);
             const bool sub = sim.self_collision_substepped() > before;
@@ -600,7 +600,7 @@ TEST(SelfCollision, BitwiseSameForEveryThreadCount) {
         for (int k = 0; k < 3; ++k) {
             Pile pile = folded_pile(0.004f, solver);
             if (variant == 1) pile.params.integrator = Integrator::verlet;
-            const auto steps = static_cast<std::size_t>((solver == Solver::implicit ? 0.05 : 0.07) / pile.params.dt);
+            const auto steps = static_cast<std::size_t>((solver == Solver::implicit ? 0.1 : 0.07) / pile.params.dt);
             Workers arena(k == 2 ? 2 : 1);
             arena.run([&] {
                 Simulation sim(std::move(pile.scene.cloth), pile.scene.initial, pile.params);
@@ -755,7 +755,7 @@ TEST(SelfCollisionBroadPhase, SameBitsAsTestingEveryPair) {
     }
     {
         Pile pile = folded_pile(0.004f, Solver::implicit);
-        cases.push_back({"folded in two, implicit", std::move(pile.scene), pile.params, checks, 2});
+        cases.push_back({"folded in two, implicit", std::move(pile.scene), pile.params, checks, 4});
     }
     for (BroadPhaseCase& c : cases) {
         SCOPED_TRACE(c.name);

@@ -12,6 +12,9 @@
 
 namespace drape {
 
+/// CoarseLevel::held values.
+enum : std::uint8_t { node_free = 0, node_fixed = 1, node_touching = 2 };
+
 /// One coarser copy of the same fabric (Cloth::coarsen), with its own state for the current step.
 struct CoarseLevel {
     Cloth cloth;
@@ -29,7 +32,9 @@ struct CoarseLevel {
     /// fixed particle holds the node that stands for it on every level (held), not only a node whose nearest
     /// particle it happens to be.
     std::vector<std::uint32_t> up;
-    std::vector<std::uint8_t> held; ///< this step's: the node stands for a fixed particle of the cloth
+    /// This step's: node_fixed where the node stands for a fixed particle of the cloth, node_touching where its
+    /// interpolation reaches a particle that touches or may touch a collider (multilevel_guess), else node_free.
+    std::vector<std::uint8_t> held;
     std::vector<float> rx, ry, rz;    ///< the cloth's force residual at x^n restricted onto this level (N)
     std::vector<float> tx, ty, tz;    ///< scratch: this level's own residual at x^n
     std::vector<float> rest0, rest;   ///< per Cloth::edges entry: the natural rest length and this step's
@@ -43,6 +48,7 @@ struct ImplicitSolver {
     std::vector<float> corr_x, corr_y, corr_z; ///< the finest coarse level's correction, sampled onto the cloth
     std::vector<float> res_x, res_y, res_z;    ///< the cloth's force residual at x^n (N); then gradient scratch
     std::vector<double> block_dot;             ///< per block of particles: a partial dot product
+    std::vector<std::uint8_t> touching; ///< per particle, this step's: it touches or may touch a collider
     /// Per particle: its piece of cloth (joined by springs) as a union-find root, and per root whether the piece holds
     /// a fixed particle (the first step's guess, implicit_step.cpp).
     std::vector<std::uint32_t> piece;

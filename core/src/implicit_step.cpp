@@ -226,6 +226,7 @@ void Simulation::cook_implicit() {
             solver->coarse.push_back(std::move(level));
         }
         if (!solver->coarse.empty()) {
+            solver->touching.assign(cloth_.particle_count, 0);
             for (std::vector<float>* a : {&solver->corr_x, &solver->corr_y, &solver->corr_z, &solver->res_x,
                                           &solver->res_y, &solver->res_z})
                 a->assign(cloth_.particle_count, 0.0f);
@@ -319,7 +320,42 @@ template <bool Parallel> bool Simulation::multilevel_guess() {
         std::uint32_t k = static_cast<std::uint32_t>(i);
         for (CoarseLevel& L : is.coarse) {
             k = L.up[k];
-            L.held[k] = 1;
+            L.held[k] = node_fixed;
+        }
+    }
+    // Against colliders the coarse levels leave the cloth where it touches them to its own sweeps (truncation, as in
+    // monotone multigrid for obstacle problems): a node whose interpolation reaches a particle that touched a collider
+    // in the last step or is within h |v| + |g| h^2 of one (the step may take it there; a cloth at rest on a disc: the
+    // 2 mm drum skin of its top), or reaches such a node on the next finer level, is held at the cloth's guess. A
+    // coarse copy cannot be at rest where the cloth is (its nodes cut the rim's corner), and its correction there
+    // moved a drape at rest on the disc by itself (N = 34: DC 0.29 -> 0.53 in 3 s). Held only while the cloth is slow,
+    // the frictionless rim test stretched to 0.16; held always, the wool on the sphere (cap and skirt within reach)
+    // keeps only the cloth's sweeps there and stretches more on the way (0.092 at 2 s against 0.014; 0.019 at 8 s
+    // against 0.007) (docs/implicit.md, "Coarse levels in contact").
+    const bool contact = !params_.colliders.empty();
+    if (contact) {
+        const float *cnx = is.fine.contact_nx(), *cny = is.fine.contact_ny(), *cnz = is.fine.contact_nz();
+        const float gh2 = std::sqrt(gx * gx + gy * gy + gz * gz) * h2;
+        const std::size_t n = cloth_.particle_count;
+        std::uint8_t* touching = is.touching.data();
+        for_each_index<Parallel>(cloth_.block_count(), [&](std::size_t blk) {
+            for (std::size_t i = blk * block_particles, end = std::min(n, (blk + 1) * block_particles); i < end; ++i) {
+                bool t = cnx[i] != 0.0f || cny[i] != 0.0f || cnz[i] != 0.0f;
+                const float reach = h * std::sqrt(a.u[i] * a.u[i] + a.v[i] * a.v[i] + a.w[i] * a.w[i]) + gh2;
+                for (std::size_t c = 0; !t && c < params_.colliders.size(); ++c)
+                    t = is_inside(params_.colliders[c], {a.x[i], a.y[i], a.z[i]}, -reach);
+                touching[i] = t ? 1 : 0;
+            }
+        });
+        for (std::size_t l = 0; l < is.coarse.size(); ++l) {
+            CoarseLevel& L = is.coarse[l];
+            const LevelTransfer& t = L.to_finer;
+            for (std::size_t k = 0; k < t.size(); ++k) {
+                if (l == 0 ? !touching[k] : is.coarse[l - 1].held[k] != node_touching) continue;
+                for (std::size_t c = 0; c < LevelTransfer::width; ++c)
+                    if (t.weight[k][c] != 0.0f && L.held[t.index[k][c]] == node_free)
+                        L.held[t.index[k][c]] = node_touching;
+            }
         }
     }
     // FAS at rest comes in over fas_rest_ramp_steps: its correction tau scaled from 1 / ramp to 1, so the cloth
@@ -381,8 +417,15 @@ template <bool Parallel> bool Simulation::multilevel_guess() {
         float* pz = L.solver.pred_z();
         for_each_index<Parallel>((count + block_particles - 1) / block_particles, [&](std::size_t blk) {
             for (std::size_t k = blk * block_particles, end = std::min(count, (blk + 1) * block_particles); k < end; ++k) {
-                const bool fixed = L.held[k] || cloth_.inv_mass[L.nearest[k]] == 0.0f || L.free_inv_mass[k] == 0.0f;
+                const bool fixed = L.held[k] != node_free || cloth_.inv_mass[L.nearest[k]] == 0.0f ||
+                                   L.free_inv_mass[k] == 0.0f;
                 L.inv_mass[k] = fixed ? 0.0f : L.free_inv_mass[k];
+                if (L.held[k] == node_touching) { // at the cloth's guess: no correction
+                    px[k] = L.x[k] = L.gx[k];
+                    py[k] = L.y[k] = L.gy[k];
+                    pz[k] = L.z[k] = L.gz[k];
+                    continue;
+                }
                 if (fixed) {
                     px[k] = L.x[k] = L.gx[k] = L.x0[k];
                     py[k] = L.y[k] = L.gy[k] = L.y0[k];
@@ -402,8 +445,10 @@ template <bool Parallel> bool Simulation::multilevel_guess() {
                 L.z[k] += L.gz[k];
             }
         });
-        if (fas) {
-            // Springs compressed at x^n are slack (no buckling saddles), then the level's own residual at x^n.
+        if (fas || contact) {
+            // Springs compressed at x^n are slack (no buckling saddles; in contact, a coarse spring across a fold
+            // pushed the cloth apart with the full stretch stiffness: docs/implicit.md, "The energy source"), then,
+            // under FAS, the level's own residual at x^n.
             const std::vector<Edge>& edges = L.cloth.edges;
             for (std::size_t e = 0; e < edges.size(); ++e) {
                 const std::uint32_t i = edges[e].a, j = edges[e].b;
@@ -412,6 +457,8 @@ template <bool Parallel> bool Simulation::multilevel_guess() {
             }
             L.solver.set_spring_rest(L.rest);
             L.slack = true;
+        }
+        if (fas) {
             L.solver.gradient<false>({L.x0.data(), L.y0.data(), L.z0.data(), L.x0.data(), L.y0.data(), L.z0.data(),
                                       L.inv_mass.data()},
                                      h, params_.air_drag, L.tx.data(), L.ty.data(), L.tz.data());
@@ -424,7 +471,7 @@ template <bool Parallel> bool Simulation::multilevel_guess() {
                 py[k] += ramp * (h2 * w * (L.ty[k] - L.ry[k]) + h * L.vy[k]);
                 pz[k] += ramp * (h2 * w * (L.tz[k] - L.rz[k]) + h * L.vz[k]);
             }
-        } else if (L.slack) { // FAS switched off: the natural rest lengths again
+        } else if (L.slack && !contact) { // FAS switched off: the natural rest lengths again
             L.rest = L.rest0;
             L.solver.set_spring_rest(L.rest);
             L.slack = false;
@@ -457,11 +504,12 @@ template <bool Parallel> bool Simulation::multilevel_guess() {
             }
         });
     };
-    if (!fas) {
+    if (!fas && !contact) {
         add(1.0f);
         return false;
     }
-    // The slope of the cloth's G along the correction c at the guess and at guess + c; secant step in [0, 1].
+    // The slope of the cloth's G along the correction c at the guess and at guess + c; secant step in [0, 1] (under
+    // FAS, and against colliders: there the coarse copy's correction is not the cloth's and may raise its G).
     auto slope = [&]() {
         is.fine.gradient<Parallel>({a.x.data(), a.y.data(), a.z.data(), b.x.data(), b.y.data(), b.z.data(),
                                     cloth_.inv_mass.data()},
@@ -480,11 +528,11 @@ template <bool Parallel> bool Simulation::multilevel_guess() {
     add(1.0f);
     if (d0 >= 0.0) { // not a descent direction
         add(-1.0f);
-        return true;
+        return fas;
     }
     const double d1 = slope();
     if (d1 > 0.0) add(static_cast<float>(d0 / (d0 - d1)) - 1.0f);
-    return true;
+    return fas;
 }
 
 template <bool Parallel> void Simulation::implicit_step() {
