@@ -108,9 +108,9 @@ int main(int argc, char** argv) {
                   "cloth's own force residual (full approximation scheme): a cloth comes to rest at its own equilibrium "
                   "[scene's, off]");
     cmd->add_flag("--single-level", run.single_level,
-                  "Implicit solver: no multilevel guess, every step solved on the cloth's own grid only; for cloth "
-                  "lying folded or crumpled on a collider, where the coarse grids' guess keeps it moving "
-                  "(docs/implicit.md); a hanging cloth does not come to rest without it [scene's, multilevel on]");
+                  "Implicit solver: no multilevel guess, every step solved on the cloth's own grid only (against "
+                  "colliders the guess leaves the cloth touching them to these sweeps anyway: docs/implicit.md); a "
+                  "hanging cloth does not come to rest without it [scene's, multilevel on]");
     cmd->add_flag("--fas-at-rest", run.fas_at_rest,
                   "Implicit solver, with the multilevel guess: once the cloth's rms speed has stayed below g dt / 2 for "
                   "10 steps its coarse levels solve as with --fas (until it exceeds 2 g dt), so it comes to rest at its "
