@@ -755,7 +755,9 @@ TEST(SelfCollisionBroadPhase, SameBitsAsTestingEveryPair) {
     }
     {
         Pile pile = folded_pile(0.004f, Solver::implicit);
-        cases.push_back({"folded in two, implicit", std::move(pile.scene), pile.params, checks, 4});
+        // 0.1 s in all (24 steps): the top layer comes within the thickness after ~0.06 s.
+        cases.push_back({"folded in two, implicit", std::move(pile.scene), pile.params, checks,
+                         static_cast<std::size_t>(24 / checks)});
     }
     for (BroadPhaseCase& c : cases) {
         SCOPED_TRACE(c.name);
