@@ -205,8 +205,8 @@ int main(int argc, char** argv) {
                          "Implicit solver: stop a step once its residual is below this fraction of the first sweep's")
         ->check(in_range<float>(0.0f, 1.0f));
     view_cmd->add_flag("--single-level", view.single_level,
-                       "Implicit solver: no multilevel guess (for cloth lying folded or crumpled on a collider; "
-                       "docs/implicit.md) [scene's, multilevel on]");
+                       "Implicit solver: no multilevel guess, every step solved on the cloth's own grid only "
+                       "(docs/implicit.md) [scene's, multilevel on]");
     view_cmd->add_option("--strain-limit", view.strain_limit,
                          "Strain limiting: largest stretch of structural and seam springs, and with the explicit solver "
                          "shear springs (0.1 = 10%; 0 = off) [scene's]")

@@ -225,7 +225,7 @@ std::string single_level_implicit_warning(const Simulation& sim) {
                                  "jumped 5-27 cm per step at 30 sweeps, docs/implicit.md)";
     if (!sim.params().implicit.multilevel)
         return "the implicit solver's multilevel guess is switched off (--single-level, physics.implicit.multilevel): "
-               "right for cloth lying folded or crumpled on a collider, but a hanging cloth " + one_grid;
+               "a hanging cloth " + one_grid;
     return "the implicit solver has no multilevel guess for this cloth (only square grids and outline cloths of the "
            "fabric model have one): a cloth " + one_grid + "; prefer the explicit solver here";
 }

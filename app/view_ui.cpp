@@ -391,8 +391,8 @@ void Viewer::ui_solver() {
     if (ImGui::Checkbox("multilevel guess", &multilevel)) s.set_multilevel(multilevel);
     help_marker("Grid and outline cloths of the fabric model: each step starts from the same step solved on coarser "
                 "copies of the cloth, so a "
-                "hanging cloth falls and settles in a few sweeps. Switch it off for cloth lying folded or crumpled on "
-                "a collider: the coarse grids cannot represent a fold and their guess keeps such a cloth moving.");
+                "hanging cloth falls and settles in a few sweeps. Against colliders the coarse grids leave the cloth "
+                "where it touches them to its own sweeps, so keep it on for cloth lying on a collider too.");
     bool at_rest = p.implicit.fas_at_rest;
     if (ImGui::Checkbox("FAS at rest", &at_rest)) s.set_fas_at_rest(at_rest);
     help_marker("With the multilevel guess: once the cloth's rms speed has stayed below 0.15 g dt for 10 steps, the "
