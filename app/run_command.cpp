@@ -317,6 +317,8 @@ int run_command(const RunOptions& o) {
                          // grids the last step solved: 1 + coarse levels; 1 also when the setting is off or contact
                          // sub-steps ran single level (self_collision.substepped)
                          {"levels", st.levels},
+                         // steps whose strain limit could not hold the stretch, solved again as sub-steps
+                         {"strain_substepped", sim.strain_substepped()},
                          {"method", sp.implicit.method == ImplicitMethod::jacobi ? "jacobi" : "gauss_seidel"}};
     }
     j["kernel"] = kernel_path_name(sim.kernel());

@@ -182,6 +182,7 @@ void Simulation::update_limit_levels() noexcept {
 
 template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, bool with_collide) {
     const StrainLimit& sl = params_.strain_limit;
+    limit_over_ = false;
     if (sl.ratio <= 0.0f || limit_a_.empty() || (steps_done_ + 1) % sl.every != 0) return false;
     // The implicit solver's form (one-sided, no shear, positions only: above), a grab held or not. Until 2026-11-30 a
     // grab switched to the explicit solver's form (a drag out of the cloth's reach had put the whole excess into the
@@ -243,7 +244,8 @@ template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, b
         const std::uint32_t last_but_one = std::max<std::uint32_t>(sl.passes, 2) - 2;
         const bool triangles = pass == 0 || pass == last_but_one;
         if (with_collide) collide_stage<Parallel>(out, true, triangles ? 1 : 0);
-        if (pass + 1 >= sl.passes && !over.load(std::memory_order_relaxed)) break;
+        limit_over_ = over.load(std::memory_order_relaxed);
+        if (pass + 1 >= sl.passes && !limit_over_) break;
     }
     return true;
 }

@@ -61,6 +61,18 @@ inline constexpr std::uint32_t strain_limit_max_passes = 100;
 /// the limit at 0.095 through 100 sweeps; with the switch at 30 or 60 sweeps the whole run kept within 0.098 at
 /// N = 100, 0.099 at N = 200, 316 and 1000 (docs/implicit.md, "Compression next to the clips").
 inline constexpr std::uint32_t strain_limit_one_sided_passes = 50;
+/// An implicit step after whose strain limiting a spring is still longer than (1 + 1.05 ratio) l0 (its sweeps left a
+/// stretch the limit's strain_limit_max_passes could not take out) is dropped and solved again from its start as this
+/// many sub-steps of dt / strain_retry_substeps; a sub-step that again ends over the limit is split the same way, down
+/// to strain_retry_depth levels (dt / 27 at the default: 1/810 s for a 1/30 s step), never below implicit_min_dt. The
+/// wool dropped on the sphere at N >= 92 (10 mm cells and finer) with frame-long steps stretched its cap's rim past the
+/// limit in the steps after it landed (0.12, 0.23, 0.42, 0.67 at N = 128: the health monitor stopped the run at
+/// 0.53 s); one level of 3 held N = 100 but not 128, two levels N = 128 and 200 but not 256 (docs/implicit.md, "Steps
+/// the strain limit cannot hold"). When a step's sub-steps still end over the limit, later steps are not solved again
+/// until one ends within it (a limit no step can hold would otherwise cost every step up to 40 solves). Only while
+/// self-collision is off (core/src/substep.cpp, step_impl: with it on, the shirt's push crossed itself).
+inline constexpr std::uint32_t strain_retry_substeps = 3;
+inline constexpr std::uint32_t strain_retry_depth = 3;
 /// Provot strain limiting (seed 001 section 2; Provot 1995): after each substep, every structural, shear and seam
 /// spring longer than (1 + ratio) l0 has its ends moved toward each other by inverse mass, colour group by colour
 /// group, `passes` times or more (above). Groups are ordered outward from the cloth's authored pins (core/src/strain_limit.cpp), so one pass carries
@@ -98,7 +110,7 @@ struct SelfCollision {
 inline constexpr std::uint32_t self_collision_max_substeps = 16;
 /// A contact sub-step runs single level (no multilevel guess) when the self-collision stage's last run found contacts
 /// at more than this share of the particles: a cloth crowded against itself (a crumpled pile), which the coarse levels
-/// cannot represent (core/src/substep.cpp, contact_substeps).
+/// cannot represent (core/src/substep.cpp, implicit_substeps).
 inline constexpr double crowded_contact_share = 0.005;
 inline constexpr float self_collision_min_thickness = 0.0005f;
 inline constexpr float self_collision_max_thickness = 0.05f;
@@ -282,12 +294,15 @@ class Simulation {
     /// Parts the stage's last run cut the motion since its previous run into (1 unless a particle moved more than half
     /// the thickness: then each part moves none more than that, up to 32 parts; docs/self_collision.md).
     std::size_t self_collision_parts() const noexcept { return sc_parts_; }
-    /// Implicit steps in which self-collision pushed particles apart and the step was solved again with them held on
-    /// their contact planes, since construction (docs/self_collision.md, "Inside the implicit solve").
     /// Implicit steps solved again as SelfCollision::substeps sub-steps because cloth touched cloth in them
     /// (docs/self_collision.md, "Contact sub-steps").
     std::size_t self_collision_substepped() const noexcept { return sc_substepped_; }
+    /// Implicit steps in which self-collision pushed particles apart and the step was solved again with them held on
+    /// their contact planes, since construction (docs/self_collision.md, "Inside the implicit solve").
     std::size_t self_collision_resolves() const noexcept { return sc_resolves_; }
+    /// Implicit steps solved again as strain_retry_substeps sub-steps because their strain limiting could not hold the
+    /// limit, since construction.
+    std::size_t strain_substepped() const noexcept { return strain_substepped_; }
     /// For tests: when on, the self-collision stage tests every pair of the cloth (point-triangle and edge-edge, no
     /// patches, no culling): the reference its broad phase is checked against. O(n^2): small cloths only.
     void set_self_collision_reference(bool on) noexcept { sc_reference_ = on; }
@@ -469,7 +484,7 @@ class Simulation {
     std::vector<std::uint32_t> sc_hits_; ///< per particle: contacts that pushed it
     float sc_shortest_rest_ = 0.0f; ///< shortest rest length along a triangle edge (1-ring exemption), m
     std::size_t sc_contacts_ = 0;        ///< contacts applied in the last run's first round (self_contacts)
-    std::size_t sc_substep_contacts_ = 0; ///< sc_contacts_ after the last contact sub-step (contact_substeps)
+    std::size_t sc_substep_contacts_ = 0; ///< sc_contacts_ after the last contact sub-step (implicit_substeps)
     // The snapshot of the last run (positions after its pushes, and the step it ended): the stage runs again only once
     // some particle has moved more than a quarter of the thickness from it, and takes each pair's side from it.
     std::vector<float> sc_snap_x_, sc_snap_y_, sc_snap_z_;
@@ -502,8 +517,21 @@ class Simulation {
     /// implicit contact re-solve when it pushed). Leaves the result in the other buffer. `attempt` (implicit, contact
     /// sub-steps on): returns true, at once, when the stage pushed: the step is to be solved again in sub-steps.
     template <bool Parallel> bool step_pipeline(bool implicit, bool attempt);
-    /// The current step again, from its start, as SelfCollision::substeps implicit sub-steps.
-    template <bool Parallel> void contact_substeps();
+    /// Implicit steps in which cloth touches cloth are solved again as contact sub-steps (self-collision on, its
+    /// substeps above 1).
+    bool contact_substeps_on() const noexcept {
+        return params_.self_collision.thickness > 0.0f && params_.self_collision.substeps > 1;
+    }
+    /// The current step again, from its start, as `k` implicit sub-steps (at most one per implicit_min_dt);
+    /// `self_contact`: the contact sub-steps of self-collision (multilevel or not by how crowded the contact is);
+    /// otherwise the strain retry's, `depth` levels down: a sub-step over the limit is split again (strain_retry_depth).
+    template <bool Parallel> void implicit_substeps(std::uint32_t k, bool self_contact, std::uint32_t depth);
+    /// The last strain limiting's last sweep still found a spring over (1 + 1.05 ratio) l0.
+    bool limit_over_ = false;
+    std::size_t strain_substepped_ = 0; ///< implicit steps solved again in sub-steps (strain_substepped)
+    /// The last step's sub-steps still ended over the limit: no more retries until a step ends within it (a limit no
+    /// step can hold, a shirt pressed on a body at 1 %, would otherwise cost every step its sub-steps).
+    bool strain_retry_failed_ = false;
     template <bool Parallel> void seam_forces_stage();
     template <bool Parallel> void aero_forces_stage();
     void cook_aero();
