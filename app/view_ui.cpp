@@ -334,10 +334,16 @@ void Viewer::ui_physics() {
                        log_flags, dt))
             s.set_dt(dt);
         help_marker("One implicit step: any length is stable (1/60 s: one step per frame at 60 FPS is real time; "
-                    "1/30 s at 30 FPS). A step whose strain limit cannot hold the stretch is solved again as 3, "
-                    "9 or 27 shorter sub-steps (split for the limit).");
-        ImGui::TextDisabled("%.0f x the explicit bound %.3e s, %s split for the limit", double(p.dt) / double(bound),
-                            double(bound), grouped(s.sim().strain_substepped()).c_str());
+                    "1/30 s at 30 FPS). With self-collision off, a step whose strain limit cannot hold the stretch "
+                    "is solved again as shorter sub-steps, each split again while it still ends over the limit "
+                    "(split for the limit).");
+        if (p.self_collision.thickness > 0.0f)
+            ImGui::TextDisabled("%.0f x the explicit bound %.3e s (no split for the limit with self-collision)",
+                                double(p.dt) / double(bound), double(bound));
+        else
+            ImGui::TextDisabled("%.0f x the explicit bound %.3e s, %s split for the limit",
+                                double(p.dt) / double(bound), double(bound),
+                                grouped(s.sim().strain_substepped()).c_str());
     } else {
         if (edit_float("dt", p.dt, 1e-3f * bound, bound, "%.3e s", log_flags, dt)) s.set_dt(dt);
         help_marker("One substep. The slider ends at the explicit stability bound: an unstable dt cannot be chosen.");

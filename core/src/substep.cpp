@@ -214,7 +214,7 @@ template <bool Parallel> void Simulation::step_impl(std::size_t count) {
     const std::size_t check_every = implicit ? 8 : HealthMonitor::check_every;
     // Contact sub-steps (docs/self_collision.md): an implicit step in which cloth touches cloth (the self-collision
     // stage pushed) is dropped and solved again from its start as `substeps` shorter steps.
-    const bool sub = implicit && contact_substeps_on();
+    const bool sub = implicit && params_.self_collision.thickness > 0.0f && params_.self_collision.substeps > 1;
     // The strain retry (strain_retry_substeps) is off while self-collision is on: with it, the one step of the shirt
     // it split while settling (its limit, pressed on the body, cannot hold: no retry after that) sent the push of
     // its front into its back (tests/test_self_collision.cpp) along another path, which crossed the back at 11

@@ -517,11 +517,6 @@ class Simulation {
     /// implicit contact re-solve when it pushed). Leaves the result in the other buffer. `attempt` (implicit, contact
     /// sub-steps on): returns true, at once, when the stage pushed: the step is to be solved again in sub-steps.
     template <bool Parallel> bool step_pipeline(bool implicit, bool attempt);
-    /// Implicit steps in which cloth touches cloth are solved again as contact sub-steps (self-collision on, its
-    /// substeps above 1).
-    bool contact_substeps_on() const noexcept {
-        return params_.self_collision.thickness > 0.0f && params_.self_collision.substeps > 1;
-    }
     /// The current step again, from its start, as `k` implicit sub-steps (at most one per implicit_min_dt);
     /// `self_contact`: the contact sub-steps of self-collision (multilevel or not by how crowded the contact is);
     /// otherwise the strain retry's, `depth` levels down: a sub-step over the limit is split again (strain_retry_depth).
@@ -530,7 +525,7 @@ class Simulation {
     bool limit_over_ = false;
     std::size_t strain_substepped_ = 0; ///< implicit steps solved again in sub-steps (strain_substepped)
     /// The last step's sub-steps still ended over the limit: no more retries until a step ends within it (a limit no
-    /// step can hold, a shirt pressed on a body at 1 %, would otherwise cost every step its sub-steps).
+    /// step can hold would otherwise cost every step its sub-steps).
     bool strain_retry_failed_ = false;
     template <bool Parallel> void seam_forces_stage();
     template <bool Parallel> void aero_forces_stage();
