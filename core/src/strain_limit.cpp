@@ -174,9 +174,11 @@ void Simulation::update_limit_levels() noexcept {
     limit_levels(cloth_.inv_mass.data()); // every particle fixed now: authored pins, user pins, the grab
     for (std::size_t k = 0; k < limit_a_.size(); ++k) {
         const std::uint32_t la = limit_level_[limit_a_[k]], lb = limit_level_[limit_b_[k]];
+        constexpr std::uint32_t unreached = std::numeric_limits<std::uint32_t>::max();
         limit_inner_[k] = static_cast<std::uint8_t>((limit_inner_[k] & (strain_limit::shear | strain_limit::seam)) |
                                                     (la < lb ? strain_limit::a_inner : 0) |
-                                                    (lb < la ? strain_limit::b_inner : 0));
+                                                    (lb < la ? strain_limit::b_inner : 0) |
+                                                    (la == unreached ? strain_limit::unpinned : 0));
     }
 }
 
@@ -184,12 +186,12 @@ template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, b
     const StrainLimit& sl = params_.strain_limit;
     limit_over_ = false;
     if (sl.ratio <= 0.0f || limit_a_.empty() || (steps_done_ + 1) % sl.every != 0) return false;
-    // The implicit solver's form (one-sided, no shear, positions only: above), a grab held or not. Until 2026-11-30 a
-    // grab switched to the explicit solver's form (a drag out of the cloth's reach had put the whole excess into the
-    // spring next to the grab, before the levels by structural springs and both ends moving after 50 sweeps); that
-    // form's shear corrections squeezed the cloth around a grab held in place (|strain| 0.31 at N = 100, 0.41 at
-    // N = 300 with the limit at 0.1, and a 300 x 300 hang grabbed in the viewer blew up) where this form holds 0.100
-    // (docs/implicit.md, "A held particle in the middle").
+    // The implicit solver's form (one-sided, no shear, velocities for two-sided moves only), a grab held or not. Until
+    // 2026-11-30 a grab switched to the explicit solver's form (a drag out of the cloth's reach had put the whole
+    // excess into the spring next to the grab, before the levels by structural springs and both ends moving after 50
+    // sweeps); that form's shear corrections squeezed the cloth around a grab held in place (|strain| 0.31 at N = 100,
+    // 0.41 at N = 300 with the limit at 0.1, and a 300 x 300 hang grabbed in the viewer blew up) where this form holds
+    // 0.100 (docs/implicit.md, "A held particle in the middle").
     const bool frame_form = strain_limit_frame_form();
     strain_limit::Args c{out.x.data(),
                          out.y.data(),
@@ -206,9 +208,9 @@ template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, b
                          1.0f + 1.05f * sl.ratio,
                          frame_form ? std::max(0.0f, 1.0f - sl.ratio) : 0.0f,
                          frame_form ? std::max(0.0f, 1.0f - 1.05f * sl.ratio) : 0.0f,
-                         frame_form                                        ? 0.0f
-                         : params_.integrator == Integrator::symplectic_euler ? 1.0f / (float(sl.every) * params_.dt)
-                                                                              : 1.0f / float(sl.every),
+                         frame_form || params_.integrator == Integrator::symplectic_euler
+                             ? 1.0f / (float(sl.every) * params_.dt)
+                             : 1.0f / float(sl.every),
                          limit_particle_group_offsets_.data(),
                          limit_particle_groups_.data(),
                          limit_group_moved_.data()};
