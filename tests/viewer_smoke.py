@@ -107,7 +107,13 @@ def viewer_process(cmd):
 def quit_driven_viewer(proc, wid, what):
     """Ctrl+Q to a viewer started with --stats-json: its stats, or None (said why) when it did not quit within 60 s
     or exited with an error."""
-    subprocess.run(["xdotool", "key", "--window", wid, "ctrl+q"], check=True, timeout=30)
+    if proc.poll() is None:
+        # A viewer that exits between the check and the key leaves no window to send it to: not an error of its own.
+        subprocess.run(["xdotool", "key", "--window", wid, "ctrl+q"], timeout=30)
+    if proc.poll() is not None and proc.returncode != 0:
+        out, err = proc.communicate()
+        print(f"FAIL: {what} exited with {proc.returncode} before Ctrl+Q; stderr: {err[-2000:]}")
+        return None
     try:
         out, err = proc.communicate(timeout=60)
     except subprocess.TimeoutExpired:
