@@ -491,7 +491,8 @@ ShirtPush push_front_hem_back(float thickness, Solver solver = Solver::explicit_
         r.worst = std::max(r.worst, pairs);
         r.contacts = std::max(r.contacts, sim.self_contacts());
         r.limit_held = r.limit_held && sim.health().max_limited_stretch <= 1.1f * sim.params().strain_limit.ratio;
-        std::printf("  h = %.3f m, %s: %zu intersecting pairs, %zu contacts\n", thickness, when, pairs, sim.self_contacts());
+        std::printf("  h = %.3f m, %s: %zu intersecting pairs, %zu contacts, limited stretch %.3f\n", thickness, when,
+                    pairs, sim.self_contacts(), double(sim.health().max_limited_stretch));
     };
     sim.step(static_cast<std::size_t>(1.5 / dt));
     check("settled");

@@ -9,6 +9,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include "drape/mirror_symmetry.hpp"
 #include "drape/simulation.hpp"
 
 namespace drape {
@@ -27,6 +28,20 @@ void Simulation::cook_vertex_triangles() {
     std::vector<std::uint32_t> fill(vertex_tri_offsets_.begin(), vertex_tri_offsets_.end() - 1);
     for (std::uint32_t t = 0; t < tris; ++t)
         for (int k = 0; k < 3; ++k) vertex_tris_[fill[cloth_.triangles[3 * t + k]]++] = t;
+    // A mirror-exact cloth (mirror_symmetry.hpp): each particle's triangles in mirror order, so that a particle and its
+    // twin sum their triangles' terms alike.
+    if (cloth_.mirror.empty() || cloth_.mirror_triangle.empty()) return;
+    std::vector<std::uint32_t> ordered(vertex_tris_.size());
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto row = [&](std::size_t p) {
+            return std::span<const std::uint32_t>(vertex_tris_.data() + vertex_tri_offsets_[p],
+                                                  vertex_tri_offsets_[p + 1] - vertex_tri_offsets_[p]);
+        };
+        const std::vector<std::uint32_t> order =
+            mirror_row_order(std::uint32_t(i), cloth_.mirror[i], row(i), row(cloth_.mirror[i]), cloth_.mirror_triangle);
+        for (std::size_t k = 0; k < order.size(); ++k) ordered[vertex_tri_offsets_[i] + k] = row(i)[order[k]];
+    }
+    vertex_tris_ = std::move(ordered);
 }
 
 void Simulation::cook_aero() {

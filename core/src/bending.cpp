@@ -125,6 +125,26 @@ void set_bending(Cloth& cloth, std::vector<BendElement> elements, float damping)
         }
         b.offsets[i + 1] = static_cast<std::uint32_t>(b.neighbour.size());
     }
+    // A mirror-exact cloth (mirror_symmetry.hpp): a particle after its twin takes the twin's coefficients, a particle on
+    // the centre line the same coefficient for a neighbour and its twin (the terms' sums differ in rounding).
+    const std::vector<std::uint32_t>& twin = cloth.mirror;
+    if (!twin.empty()) {
+        auto at = [&](std::uint32_t i, std::uint32_t j) {
+            const auto first = b.neighbour.begin() + b.offsets[i], last = b.neighbour.begin() + b.offsets[i + 1];
+            const auto it = std::lower_bound(first, last, j);
+            if (it == last || *it != j)
+                throw InvalidInput("mirror map: bending couples particles " + std::to_string(twin[i]) + " and " +
+                                   std::to_string(twin[j]) + " but not their twins " + std::to_string(i) + " and " +
+                                   std::to_string(j) + " (the mesh is not its own mirror image)");
+            return static_cast<std::size_t>(it - b.neighbour.begin());
+        };
+        for (std::uint32_t i = 0; i < n; ++i)
+            for (std::uint32_t k = b.offsets[i]; k < b.offsets[i + 1]; ++k) {
+                const std::uint32_t j = b.neighbour[k];
+                if (twin[i] < i) b.value[k] = b.value[at(twin[i], twin[j])];
+                else if (twin[i] == i && twin[j] < j) b.value[k] = b.value[at(i, twin[j])];
+            }
+    }
 
     // SELL-C over the padded particle range, as SpringGraph (spring_graph.hpp).
     constexpr std::size_t C = simd::width;
@@ -136,11 +156,13 @@ void set_bending(Cloth& cloth, std::vector<BendElement> elements, float damping)
         for (std::size_t lane = 0; lane < C; ++lane) {
             const std::size_t i = s * C + lane;
             const std::uint32_t len = i < n ? b.offsets[i + 1] - b.offsets[i] : 0;
+            const std::vector<std::uint32_t> order = mirror_order(b.offsets, b.neighbour, i < n ? i : n, twin);
             for (std::uint32_t slot = 0; slot < b.slice_slots[s]; ++slot) {
                 const std::size_t at = b.slice_begin[s] + slot * C + lane;
                 if (slot < len) {
-                    b.sell_neighbour[at] = b.neighbour[b.offsets[i] + slot];
-                    b.sell_coefficient[at] = static_cast<float>(-b.value[b.offsets[i] + slot]);
+                    const std::uint32_t k = b.offsets[i] + (order.empty() ? slot : order[slot]);
+                    b.sell_neighbour[at] = b.neighbour[k];
+                    b.sell_coefficient[at] = static_cast<float>(-b.value[k]);
                 } else {
                     b.sell_neighbour[at] = static_cast<std::uint32_t>(i); // inert: zero difference, zero coefficient
                 }

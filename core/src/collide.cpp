@@ -113,7 +113,9 @@ std::size_t Simulation::collide_triangles(float* x, float* y, float* z, float* v
     const std::vector<Collider>& colliders = params_.colliders;
     const std::size_t tris = tri_in_contact_.size(), n = cloth_.particle_count;
     if (tris == 0 || colliders.empty()) return 0;
-    const std::uint32_t* tri = cloth_.triangles.data();
+    // A mirror-exact cloth's triangles in mirror corner order (make_mirror_exact): a triangle and its twin take the
+    // same steps.
+    const std::uint32_t* tri = cloth_.mirror_corners.empty() ? cloth_.triangles.data() : cloth_.mirror_corners.data();
     const float* w = cloth_.inv_mass.data();
     constexpr std::size_t tri_block = 256;
     const std::size_t tri_blocks = (tris + tri_block - 1) / tri_block;

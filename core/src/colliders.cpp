@@ -492,8 +492,12 @@ Vec3f ellipsoid_closest_point(Vec3f semi_axes, Vec3f q_in) noexcept {
         if (done) break;
     }
     double x[3];
-    for (int k = 0; k < 3; ++k)
+    for (int k = 0; k < 3; ++k) {
         x[k] = a2[k] * q[k] / (a2[k] + s);
+        // A point on a symmetry plane whose closest point stayed on it (the nudge alone moved it off, by ~1e-9 a):
+        // exactly on the plane, so a mirror-symmetric cloth stays so (mirror_symmetry.hpp).
+        if (q_in[k] == 0.0f && std::abs(x[k]) <= 1e-6 * a[k]) x[k] = 0.0;
+    }
     // Radial snap onto the surface, then out by a few float ulps until the float point is not inside.
     double g = 0.0;
     for (int k = 0; k < 3; ++k)

@@ -9,23 +9,7 @@
 
 namespace drape {
 
-std::vector<std::uint32_t> tshirt_mirror_map(const TShirtParams& params) {
-    const TShirtBuild t = build_tshirt(params);
-    std::vector<std::uint32_t> map(t.assembly.particle_count());
-    for (const MaskPanelBuild* panel : {&t.front, &t.back})
-        for (std::int64_t r = 0; r < panel->rows; ++r)
-            for (std::int64_t c = 0; c < panel->columns; ++c) {
-                const std::int32_t i = panel->particle_at(r, c);
-                if (i < 0) continue;
-                const std::int32_t j = panel->particle_at(r, panel->columns - 1 - c);
-                if (j < 0)
-                    throw InvalidInput("tshirt_mirror_map: the mask is not left-right symmetric: row " +
-                                       std::to_string(r) + ", column " + std::to_string(c) + " has a particle, column " +
-                                       std::to_string(panel->columns - 1 - c) + " none");
-                map[static_cast<std::size_t>(i)] = static_cast<std::uint32_t>(j);
-            }
-    return map;
-}
+std::vector<std::uint32_t> tshirt_mirror_map(const TShirtParams& params) { return build_tshirt(params).mirror; }
 
 GarmentFigures garment_figures(const Simulation& sim, std::span<const std::uint32_t> mirror, double beyond_distance) {
     GarmentFigures f;

@@ -58,6 +58,7 @@ struct StepContext {
     const float* __restrict sell_rest;
     const float* __restrict sell_stiffness;
     const float* __restrict sell_damping;
+    bool mirror; ///< the cloth is mirror-exact (Cloth::mirror): the CSR sums use accumulate_term's exact form
 
     // Bending (bending.hpp): Q's off-diagonal rows, SIMD-sliced; null when the cloth has no bending.
     bool bending;

@@ -46,7 +46,7 @@ void check_mask(const MaskPanel& mask) {
 }
 
 MaskPanelBuild add_mask_panel(GarmentAssembly& io, const MaskPanel& mask, float spacing, float particle_mass,
-                              const PanelFrame& frame) {
+                              const PanelFrame& frame, std::uint32_t origin_column) {
     check_mask(mask);
     check_range("panel spacing", spacing, 1e-4f, 10.0f, " m");
     check_range("particle mass", particle_mass, 1e-9f, 10.0f, " kg");
@@ -74,7 +74,7 @@ MaskPanelBuild add_mask_panel(GarmentAssembly& io, const MaskPanel& mask, float 
         for (std::uint32_t c = 0; c < cols; ++c) {
             if (mask.rows[r][c] != '1') continue;
             out.cell_particle[std::size_t{r} * cols + c] = static_cast<std::int32_t>(next++);
-            push_particle(io, frame, c * h, r * h, particle_mass);
+            push_particle(io, frame, (double(c) - double(origin_column)) * h, r * h, particle_mass);
         }
     out.particle_count = static_cast<std::uint32_t>(count);
 

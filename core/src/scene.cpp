@@ -641,6 +641,7 @@ SceneSpec parse_scene(const std::string& text, const std::string& source, const 
         t.shoulder_y = static_cast<float>(cloth.number("shoulder_y", -10.0, 10.0, " m", t.shoulder_y));
         t.gap = static_cast<float>(cloth.number("gap", 0.001, 2.0, " m", t.gap));
         t.seam_rest_ratio = static_cast<float>(cloth.number("seam_rest_ratio", 0.01, 2.0, "", t.seam_rest_ratio));
+        t.mirror_exact = cloth.boolean("mirror_exact", t.mirror_exact);
     }
     cloth.finish();
 

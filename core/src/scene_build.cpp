@@ -12,6 +12,7 @@
 
 #include "drape/errors.hpp"
 #include "drape/level_transfer.hpp"
+#include "drape/mirror_symmetry.hpp"
 #include "drape/pattern_seams.hpp"
 #include "drape/stability.hpp"
 #include "drape/triangle_fabric.hpp"
@@ -437,6 +438,7 @@ BuiltScene build_scene_body(const SceneSpec& s) {
         const std::vector<float> inv_mass = a.inverse_masses();
         cook_assembly(s, a, inv_mass, inv_mass, out);
         out.cloth.free_inv_mass.clear();
+        if (s.tshirt.mirror_exact) make_mirror_exact(out.cloth, std::move(t.mirror));
     } else {
         const TShirtBuild t = build_tshirt(s.tshirt);
         const GarmentAssembly& a = t.assembly;
@@ -447,6 +449,7 @@ BuiltScene build_scene_body(const SceneSpec& s) {
             material[kind] = {ks[kind], s.damping_ratio * 2.0f * std::sqrt(ks[kind] * mass * 0.5f)};
         out.cloth = cook_cloth(a.inverse_masses(), a.edges, material);
         out.cloth.triangles = a.triangles;
+        if (s.tshirt.mirror_exact) make_mirror_exact(out.cloth, t.mirror);
         out.initial = a.initial_state();
     }
     out.params = s.physics;

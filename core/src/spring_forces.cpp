@@ -21,6 +21,9 @@ void spring_forces_dispatch(const StepContext& c, KernelPath path, std::size_t b
     if (path == KernelPath::grid)
         c.bending ? spring_forces_impl<I, GridFabric, Extra>(c, begin, end)
                   : spring_forces_impl<I, GridSprings, Extra>(c, begin, end);
+    else if (c.mirror)
+        c.bending ? spring_forces_impl<I, CsrFabricT<true>, Extra>(c, begin, end)
+                  : spring_forces_impl<I, CsrSpringsT<true>, Extra>(c, begin, end);
     else
         c.bending ? spring_forces_impl<I, CsrFabric, Extra>(c, begin, end)
                   : spring_forces_impl<I, CsrSprings, Extra>(c, begin, end);

@@ -65,8 +65,17 @@ struct GridSprings {
     }
 };
 
+/// acc + a b: one rounding (fma) on every cloth; on a mirror-exact cloth (Cloth::mirror, mirror_symmetry.hpp) the
+/// product and the sum rounded apart, so that a term followed by its mirror image cancels exactly: a particle on the
+/// centre line sums each neighbour next to its twin, and with fma a pair leaves the product's rounding error behind.
+template <bool Exact> DRAPE_INLINE fbatch accumulate_term(fbatch a, fbatch b, fbatch acc) noexcept {
+    if constexpr (Exact) return acc + a * b;
+    else return simd::fma(a, b, acc);
+}
+
 /// General path: SIMD-sliced CSR, gathers of the neighbour state. Inert padding entries contribute exactly 0.
-struct CsrSprings {
+/// Exact: accumulate_term's mirror-exact form.
+template <bool Exact> struct CsrSpringsT {
     template <Integrator I>
     DRAPE_INLINE static Vec3b accumulate(const StepContext& c, std::size_t p, const SelfBatch& s) noexcept {
         using ibatch = xsimd::batch<std::int32_t>;
@@ -87,13 +96,14 @@ struct CsrSprings {
                 s, fbatch::gather(c.x, idx), fbatch::gather(c.y, idx), fbatch::gather(c.z, idx),
                 fbatch::gather(c.u, idx), fbatch::gather(c.v, idx), fbatch::gather(c.w, idx), k,
                 k * simd::load(c.sell_rest + at), kd, d);
-            f.x = simd::fma(coef, d.x, f.x);
-            f.y = simd::fma(coef, d.y, f.y);
-            f.z = simd::fma(coef, d.z, f.z);
+            f.x = accumulate_term<Exact>(coef, d.x, f.x);
+            f.y = accumulate_term<Exact>(coef, d.y, f.y);
+            f.z = accumulate_term<Exact>(coef, d.z, f.z);
         }
         return f;
     }
 };
+using CsrSprings = CsrSpringsT<false>;
 
 /// A neighbour's position difference plus beta times its velocity difference, d + beta (v_j - v_i): what Rayleigh
 /// damping adds to a linear force (bending: f = -Q (x + beta v)). d = x_j - x_i, du = u_j - u_i of the integrator's
@@ -106,8 +116,8 @@ template <Integrator I> DRAPE_INLINE fbatch damped_difference(fbatch d, fbatch d
 }
 
 /// Bending over Q's SIMD-sliced rows (general path): f_i = sum_j -Q_ij (d_j + beta (v_j - v_i)), gathers of the
-/// neighbour state. Padding entries (the particle itself, coefficient 0) contribute exactly 0.
-struct CsrBending {
+/// neighbour state. Padding entries (the particle itself, coefficient 0) contribute exactly 0. Exact: as CsrSpringsT.
+template <bool Exact> struct CsrBendingT {
     template <Integrator I>
     DRAPE_INLINE static void accumulate(const StepContext& c, std::size_t p, const SelfBatch& s, Vec3b& f) noexcept {
         using ibatch = xsimd::batch<std::int32_t>;
@@ -122,24 +132,25 @@ struct CsrBending {
             const fbatch dx = damped_difference<I>(fbatch::gather(c.x, idx) - s.x, fbatch::gather(c.u, idx) - s.u, beta);
             const fbatch dy = damped_difference<I>(fbatch::gather(c.y, idx) - s.y, fbatch::gather(c.v, idx) - s.v, beta);
             const fbatch dz = damped_difference<I>(fbatch::gather(c.z, idx) - s.z, fbatch::gather(c.w, idx) - s.w, beta);
-            f.x = simd::fma(a, dx, f.x);
-            f.y = simd::fma(a, dy, f.y);
-            f.z = simd::fma(a, dz, f.z);
+            f.x = accumulate_term<Exact>(a, dx, f.x);
+            f.y = accumulate_term<Exact>(a, dy, f.y);
+            f.z = accumulate_term<Exact>(a, dz, f.z);
         }
     }
 };
 
-/// General path with bending (fabric model on any mesh): springs, then bending.
-struct CsrFabric {
+/// General path with bending (fabric model on any mesh): springs, then bending. Exact: as CsrSpringsT.
+template <bool Exact> struct CsrFabricT {
     template <Integrator I>
     DRAPE_INLINE static Vec3b accumulate(const StepContext& c, std::size_t p, const SelfBatch& s) noexcept {
-        const Vec3b f = CsrSprings::accumulate<I>(c, p, s);
+        const Vec3b f = CsrSpringsT<Exact>::template accumulate<I>(c, p, s);
         const fbatch zero(0.0f);
         Vec3b fb{zero, zero, zero}; // its own accumulator, as GridFabric's
-        CsrBending::accumulate<I>(c, p, s, fb);
+        CsrBendingT<Exact>::template accumulate<I>(c, p, s, fb);
         return {f.x + fb.x, f.y + fb.y, f.z + fb.z};
     }
 };
+using CsrFabric = CsrFabricT<false>;
 
 /// Regular-grid fabric (MaterialModel::fabric on a grid), one pass over the 12 slots in ascending order, each
 /// neighbour loaded once:

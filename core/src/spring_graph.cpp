@@ -19,7 +19,8 @@ const char* spring_kind_name(SpringKind kind) noexcept {
     return "unknown";
 }
 
-SpringGraph build_spring_graph(std::size_t particle_count, std::size_t padded_count, std::span<const Edge> edges) {
+SpringGraph build_spring_graph(std::size_t particle_count, std::size_t padded_count, std::span<const Edge> edges,
+                               std::span<const std::uint32_t> mirror) {
     SpringGraph g;
     const std::size_t n = particle_count;
 
@@ -66,10 +67,11 @@ SpringGraph build_spring_graph(std::size_t particle_count, std::size_t padded_co
         for (std::size_t lane = 0; lane < C; ++lane) {
             const std::size_t i = s * C + lane;
             const std::uint32_t len = i < n ? g.offsets[i + 1] - g.offsets[i] : 0;
+            const std::vector<std::uint32_t> order = mirror_order(g.offsets, g.neighbour, i < n ? i : n, mirror);
             for (std::uint32_t slot = 0; slot < g.slice_slots[s]; ++slot) {
                 const std::size_t at = g.slice_begin[s] + slot * C + lane;
                 if (slot < len) {
-                    const std::uint32_t k = g.offsets[i] + slot;
+                    const std::uint32_t k = g.offsets[i] + (order.empty() ? slot : order[slot]);
                     g.sell_neighbour[at] = g.neighbour[k];
                     g.sell_edge[at] = g.edge_index[k];
                     g.sell_rest[at] = edges[g.edge_index[k]].rest;

@@ -49,14 +49,16 @@ template <Integrator I, class Springs, bool Extra> FusedFn pick_fused(bool wind)
     return wind ? fused_block<I, Springs, true, Extra> : fused_block<I, Springs, false, Extra>;
 }
 
-template <Integrator I, bool Extra> FusedFn pick_fused(KernelPath path, bool wind, bool bending) {
+template <Integrator I, bool Extra> FusedFn pick_fused(KernelPath path, bool wind, bool bending, bool mirror) {
     if (path == KernelPath::grid)
         return bending ? pick_fused<I, GridFabric, Extra>(wind) : pick_fused<I, GridSprings, Extra>(wind);
+    if (mirror)
+        return bending ? pick_fused<I, CsrFabricT<true>, Extra>(wind) : pick_fused<I, CsrSpringsT<true>, Extra>(wind);
     return bending ? pick_fused<I, CsrFabric, Extra>(wind) : pick_fused<I, CsrSprings, Extra>(wind);
 }
 
-template <Integrator I> FusedFn pick_fused(KernelPath path, bool wind, bool seams, bool bending) {
-    return seams ? pick_fused<I, true>(path, wind, bending) : pick_fused<I, false>(path, wind, bending);
+template <Integrator I> FusedFn pick_fused(KernelPath path, bool wind, bool seams, bool bending, bool mirror) {
+    return seams ? pick_fused<I, true>(path, wind, bending, mirror) : pick_fused<I, false>(path, wind, bending, mirror);
 }
 
 } // namespace
@@ -134,6 +136,7 @@ kernels::StepContext Simulation::make_context(std::size_t step_index) {
     const BendingSet& bend = cl.bending;
     // GridFabric also for a fabric grid without bending (its boundary halves); its bending weights are then 0.
     c.bending = !bend.empty() || (kernel_ == KernelPath::grid && cl.grid && cl.grid->half_edges);
+    c.mirror = !cl.mirror.empty();
     c.bend_beta = params_.integrator == Integrator::verlet ? bend.damping * c.inv_dt : bend.damping;
     c.bend_slice_begin = bend.slice_begin.data();
     c.bend_slice_slots = bend.slice_slots.data();
@@ -174,8 +177,8 @@ template <bool Parallel> void Simulation::explicit_substep() {
     if (seams) seam_forces_stage<Parallel>();
     if (params_.fused) {
         const kernels::FusedFn fn = integ == Integrator::symplectic_euler
-                                        ? kernels::pick_fused<Integrator::symplectic_euler>(kernel_, wind, extra, bending)
-                                        : kernels::pick_fused<Integrator::verlet>(kernel_, wind, extra, bending);
+                                        ? kernels::pick_fused<Integrator::symplectic_euler>(kernel_, wind, extra, bending, c.mirror)
+                                        : kernels::pick_fused<Integrator::verlet>(kernel_, wind, extra, bending, c.mirror);
         for_each_block<Parallel>(cloth_, [&](std::size_t b, std::size_t begin, std::size_t end) {
             fn(c, begin, end, b);
         });

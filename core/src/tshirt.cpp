@@ -73,11 +73,14 @@ TShirtBuild build_tshirt(const TShirtParams& p) {
 
     // Front: normal +z, columns run along -x. Back: normal -z, columns along +x. Column c of the front and
     // column 2m - c of the back sit at the same x.
-    const float half_span = static_cast<float>(static_cast<double>(g.m) * h);
+    // mirror_exact: both frames' origins on the centre line x = 0, at the centre column m, so the halves are exact
+    // mirror images; otherwise at the first column (half_span rounded to float: the halves differ by an ulp).
+    const float half_span = p.mirror_exact ? 0.0f : static_cast<float>(static_cast<double>(g.m) * h);
+    const auto m = p.mirror_exact ? static_cast<std::uint32_t>(g.m) : 0u;
     PanelFrame front{{half_span, p.shoulder_y, 0.5f * p.gap}, {-1.0f, 0.0f, 0.0f}, {0.0f, -1.0f, 0.0f}};
     PanelFrame back{{-half_span, p.shoulder_y, -0.5f * p.gap}, {1.0f, 0.0f, 0.0f}, {0.0f, -1.0f, 0.0f}};
-    out.front = add_mask_panel(out.assembly, out.mask, out.spacing, particle_mass, front);
-    out.back = add_mask_panel(out.assembly, out.mask, out.spacing, particle_mass, back);
+    out.front = add_mask_panel(out.assembly, out.mask, out.spacing, particle_mass, front, m);
+    out.back = add_mask_panel(out.assembly, out.mask, out.spacing, particle_mass, back, m);
 
     const float seam_rest = static_cast<float>(p.seam_rest_ratio * h);
     const std::int64_t width = 2 * g.m + 1, last_row = g.rows - 1;
@@ -109,6 +112,15 @@ TShirtBuild build_tshirt(const TShirtParams& p) {
                                           seam_rest});
         }
     }
+    out.mirror.assign(out.assembly.particle_count(), 0);
+    for (const MaskPanelBuild* panel : {&out.front, &out.back})
+        for (std::int64_t r = 0; r < panel->rows; ++r)
+            for (std::int64_t c = 0; c < panel->columns; ++c) {
+                const std::int32_t i = panel->particle_at(r, c), j = panel->particle_at(r, panel->columns - 1 - c);
+                if (i < 0) continue;
+                if (j < 0) throw std::logic_error("tshirt mask is not symmetric");
+                out.mirror[static_cast<std::size_t>(i)] = static_cast<std::uint32_t>(j);
+            }
     return out;
 }
 

@@ -96,6 +96,12 @@ struct Cloth {
     std::optional<GridStencil> grid; ///< present when the cloth is a full or masked regular grid
     BendingSet bending;              ///< bending elements and their Q (bending.hpp); empty in the springs model
     std::vector<std::uint32_t> triangles; ///< 3 indices per triangle, counter-clockwise seen from +normal
+    /// Each particle's mirror twin when the cloth is its own mirror image and made mirror-exact
+    /// (make_mirror_exact, mirror_symmetry.hpp); empty otherwise.
+    std::vector<std::uint32_t> mirror;
+    std::vector<std::uint32_t> mirror_triangle; ///< with `mirror`: each triangle's mirror image (mirror_triangle_map)
+    /// With `mirror`: the triangles' corners in mirror order (make_mirror_exact), for the collide stage's triangle pass.
+    std::vector<std::uint32_t> mirror_corners;
     /// The simulation frame: every position of this cloth (InitialState, the Simulation's state, its
     /// colliders and grab targets) is relative to this point, m, world coordinates in double. Scenes put it
     /// at the cloth's centre, so float32 positions keep their precision wherever the cloth is (a 1 cm cloth

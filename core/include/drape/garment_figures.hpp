@@ -14,8 +14,7 @@
 namespace drape {
 
 /// For each particle of the T-shirt built from `params`, the particle that is its mirror image (x -> -x): column c
-/// <-> columns - 1 - c of the same panel and row. Throws InvalidInput naming the row and column where the mask is not
-/// left-right symmetric.
+/// <-> columns - 1 - c of the same panel and row (TShirtBuild::mirror).
 std::vector<std::uint32_t> tshirt_mirror_map(const TShirtParams& params);
 
 struct GarmentFigures {

@@ -56,8 +56,11 @@ void check_mask(const MaskPanel& mask);
 /// mirrored about the mask's centre column - (r,c+1)-(r+1,c) (the hang scene's) left of it, (r,c)-(r+1,c+1) right of
 /// it - so a mask symmetric left-right gives a mesh symmetric left-right; a cell with three corners gives the one
 /// triangle of those three.
+/// `origin_column`: the mask column the frame's origin sits at (0: the first); a particle's u is
+/// (column - origin_column) x spacing, so a panel whose origin is its centre column lies exactly mirror-symmetric
+/// about it (the T-shirt's).
 /// Throws InvalidInput.
 MaskPanelBuild add_mask_panel(GarmentAssembly& io_assembly, const MaskPanel& mask, float spacing,
-                              float particle_mass, const PanelFrame& frame = {});
+                              float particle_mass, const PanelFrame& frame = {}, std::uint32_t origin_column = 0);
 
 } // namespace drape

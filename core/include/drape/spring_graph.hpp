@@ -54,7 +54,9 @@ struct SpringGraph {
 };
 
 /// Builds CSR and SELL from edges over `particle_count` particles (padded to `padded_count`). Seam springs are left
-/// out (Cloth::seams handles them).
-SpringGraph build_spring_graph(std::size_t particle_count, std::size_t padded_count, std::span<const Edge> edges);
+/// out (Cloth::seams handles them). CSR rows are sorted by neighbour; SELL rows follow them, or with a `mirror` map
+/// (mirror_symmetry.hpp) mirror_row_order's order, so a particle and its twin sum their springs alike.
+SpringGraph build_spring_graph(std::size_t particle_count, std::size_t padded_count, std::span<const Edge> edges,
+                               std::span<const std::uint32_t> mirror = {});
 
 } // namespace drape

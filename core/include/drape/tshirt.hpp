@@ -32,6 +32,12 @@ struct TShirtParams {
     /// seams start `gap` long and pull the panels together to this length: a closed seam leaves a gap this wide
     /// (0.5 h here; the built-in scene uses 0.05 h and sews the seams shut at SimulationParams::sewing_speed).
     float seam_rest_ratio = 0.5f;
+    /// Exact mirror symmetry (mirror_symmetry.hpp; docs/garments.md, "Mirror-exact sums"): both panels placed from
+    /// their centre column, so the halves start as exact mirror images, and the cooked cloth made mirror-exact
+    /// (make_mirror_exact) so that they stay so through sewing, bending and body contact. Off by default: with it the
+    /// hem pushed into the back panel (tests/test_self_collision.cpp) ends with the strain limit exceeded (explicit)
+    /// and the panels crossed (implicit), the self-collision and strain-limit stages not being mirror-ordered.
+    bool mirror_exact = false;
 };
 
 /// Which part of the pattern a sewn front particle lies on.
@@ -44,6 +50,8 @@ struct TShirtBuild {
     float spacing = 0.0f;                  ///< h, m
     std::vector<std::uint32_t> seam_edges; ///< indices into assembly.edges of the seam springs
     std::vector<SeamPart> seam_part;       ///< per seam edge, the part of the pattern it closes
+    /// Each particle's mirror twin (x -> -x): the particle of the same panel and row in the mirrored column.
+    std::vector<std::uint32_t> mirror;
 };
 
 /// The T-shirt mask at `cells_per_metre` (10..1000), symmetric left-right. Throws InvalidInput.
