@@ -8,6 +8,7 @@
 #include "drape/garment_figures.hpp"
 #include "drape/mirror_symmetry.hpp"
 #include "drape/scene.hpp"
+#include "drape/scene_write.hpp"
 #include "drape/simulation.hpp"
 
 using namespace drape;
@@ -73,4 +74,15 @@ TEST(MirrorSymmetry, TShirtStaysItsOwnMirrorImageBitForBit) {
     }
     EXPECT_TRUE(sim.health().finite);
     EXPECT_GT(contact_steps, 10u) << "the shirt was not sewn and dropped on the body during the run";
+}
+
+TEST(MirrorSymmetry, SceneFilesSwitchItOnAndOtherClothsStayAsTheyWere) {
+    const SceneSpec on = parse_scene(R"({"cloth": {"type": "tshirt", "mirror_exact": true}})", "test");
+    EXPECT_TRUE(on.tshirt.mirror_exact);
+    EXPECT_FALSE(build_scene(on).cloth.mirror.empty());
+    EXPECT_TRUE(parse_scene(scene_to_json(on), "written").tshirt.mirror_exact) << "a saved scene keeps it";
+    const SceneSpec off = load_scene("tshirt");
+    EXPECT_FALSE(off.tshirt.mirror_exact);
+    EXPECT_TRUE(build_scene(off).cloth.mirror.empty()) << "the default shirt keeps its bits";
+    EXPECT_THROW(parse_scene(R"({"cloth": {"type": "tshirt", "mirror_exact": 1}})", "test"), InvalidInput);
 }
