@@ -3,7 +3,7 @@
 // particles inside the body and whether the state is finite, twelve times over the run.
 //   drape_shirt [field=value ...]: cells_per_metre= (resolution, 10..1000), strain_limit= (ratio, 0 = off),
 //   seam_rest= (seam rest length over the spacing), sewing_speed= (m/s), seconds= (run length, default 3),
-//   solver=implicit, mirror_exact=1 (TShirtParams::mirror_exact), early=1 (also after the first 1, 2, 3, 10, 20, 50, 100, 200 and 500 substeps)
+//   solver=implicit, mirror_exact=1 (TShirtParams::mirror_exact), self_collision= (thickness in m, 0 = off), early=1 (also after the first 1, 2, 3, 10, 20, 50, 100, 200 and 500 substeps)
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -42,6 +42,7 @@ int main(int argc, char** argv) try {
         else if (key == "solver" && value == "implicit") spec.physics.solver = drape::Solver::implicit;
         else if (key == "early") early = value != "0";
         else if (key == "mirror_exact") spec.tshirt.mirror_exact = value != "0";
+        else if (key == "self_collision") spec.physics.self_collision.thickness = std::stof(value);
         else throw std::runtime_error("unknown field " + a);
     }
     if (!(seconds > 0.0 && seconds <= 1000.0)) throw std::runtime_error("seconds must be in (0, 1000]");

@@ -2,6 +2,7 @@
 #include "drape/colouring.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <string>
 
@@ -10,7 +11,8 @@
 namespace drape {
 
 ColourGroups colour_edges(std::span<const Edge> edges, std::size_t particle_count,
-                          std::span<const std::uint32_t> subset, std::uint32_t max_colours) {
+                          std::span<const std::uint32_t> subset, std::uint32_t max_colours,
+                          std::span<const std::uint32_t> edge_twin) {
     if (max_colours < 1 || max_colours > colouring_max_colours)
         throw InvalidInput("max_colours = " + std::to_string(max_colours) +
                            " is outside the allowed range [1, " + std::to_string(colouring_max_colours) +
@@ -27,6 +29,9 @@ ColourGroups colour_edges(std::span<const Edge> edges, std::size_t particle_coun
             throw InvalidInput("colouring: edge " + std::to_string(k) + " joins particle " +
                                std::to_string(e.a) + " to itself");
     }
+    if (!edge_twin.empty() && edge_twin.size() != edges.size())
+        throw InvalidInput("colouring: mirror map has " + std::to_string(edge_twin.size()) + " entries for " +
+                           std::to_string(edges.size()) + " edges (need one per edge)");
     std::vector<std::uint32_t> visit;
     if (subset.empty()) {
         visit.resize(edges.size());
@@ -44,23 +49,45 @@ ColourGroups colour_edges(std::span<const Edge> edges, std::size_t particle_coun
         visit.assign(subset.begin(), subset.end());
     }
 
-    // Greedy: smallest colour free at both ends. `colour_of` uses max_colours for the overflow group.
+    // With a mirror map: position in `visit` of each edge's mirror image (the unit an edge is coloured with).
+    constexpr std::uint32_t none = 0xffffffffu;
+    std::vector<std::uint32_t> partner(edge_twin.empty() ? 0 : visit.size(), none);
+    if (!edge_twin.empty()) {
+        std::vector<std::uint32_t> position(edges.size(), none);
+        for (std::size_t k = 0; k < visit.size(); ++k) position[visit[k]] = static_cast<std::uint32_t>(k);
+        for (std::size_t k = 0; k < visit.size(); ++k) {
+            const std::uint32_t m = edge_twin[visit[k]];
+            if (m >= edges.size() || position[m] == none || edge_twin[m] != visit[k])
+                throw InvalidInput("colouring: edge " + std::to_string(visit[k]) + "'s mirror image " +
+                                   std::to_string(m) + " is not among the edges coloured (or is not its mirror image)");
+            partner[k] = position[m];
+        }
+    }
+
+    // Greedy: smallest colour free at both ends (with a mirror map: at the ends of the edge and of its mirror
+    // image, coloured together). `colour_of` uses max_colours for the overflow group.
     std::vector<std::uint64_t> used(particle_count, 0);
     std::vector<std::uint32_t> colour_of(visit.size());
     std::vector<std::uint32_t> count(max_colours + 1, 0);
     const std::uint64_t allowed =
         max_colours == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << max_colours) - 1;
     for (std::size_t k = 0; k < visit.size(); ++k) {
+        const bool paired = !partner.empty() && partner[k] != k;
+        if (paired && partner[k] < k) continue; // coloured with its mirror image
         const Edge& e = edges[visit[k]];
-        const std::uint64_t free_colours = ~(used[e.a] | used[e.b]) & allowed;
+        std::array<std::uint32_t, 4> ends{e.a, e.b, e.a, e.b};
+        if (paired) ends[2] = edges[visit[partner[k]]].a, ends[3] = edges[visit[partner[k]]].b;
+        std::uint64_t taken = 0;
+        for (std::uint32_t i : ends) taken |= used[i];
+        const std::uint64_t free_colours = ~taken & allowed;
         std::uint32_t c = max_colours;
         if (free_colours != 0) {
             c = static_cast<std::uint32_t>(std::countr_zero(free_colours));
-            used[e.a] |= std::uint64_t{1} << c;
-            used[e.b] |= std::uint64_t{1} << c;
+            for (std::uint32_t i : ends) used[i] |= std::uint64_t{1} << c;
         }
         colour_of[k] = c;
         ++count[c];
+        if (paired) colour_of[partner[k]] = c, ++count[c];
     }
     // Greedy takes the smallest free colour, so the colours in use are 0..colour_count-1 without gaps.
     ColourGroups out;
@@ -76,11 +103,14 @@ ColourGroups colour_edges(std::span<const Edge> edges, std::size_t particle_coun
     out.edge_index.resize(visit.size());
     std::vector<std::uint32_t> fill(out.group_offsets.begin(), out.group_offsets.end() - 1);
     for (std::size_t k = 0; k < visit.size(); ++k) {
+        if (!partner.empty() && partner[k] < k) continue; // placed right after its mirror image
         const std::uint32_t g = colour_of[k] == max_colours ? out.colour_count : colour_of[k];
         out.edge_index[fill[g]++] = visit[k];
+        if (!partner.empty() && partner[k] != k) out.edge_index[fill[g]++] = visit[partner[k]];
     }
-    // Sort each group by particle index (memory locality); ties by edge index.
-    for (std::uint32_t g = 0; g < groups; ++g)
+    // Sort each group by particle index (memory locality); ties by edge index. With a mirror map the groups keep
+    // the visiting order, each edge's mirror image next to it.
+    for (std::uint32_t g = 0; g < groups && edge_twin.empty(); ++g)
         std::sort(out.edge_index.begin() + out.group_offsets[g],
                   out.edge_index.begin() + out.group_offsets[g + 1], [&](std::uint32_t l, std::uint32_t r) {
                       const std::uint32_t la = std::min(edges[l].a, edges[l].b),

@@ -92,6 +92,24 @@ std::vector<std::uint32_t> mirror_triangle_map(std::span<const std::uint32_t> tr
     return map;
 }
 
+std::vector<std::uint32_t> mirror_edge_map(std::span<const Edge> edges, std::span<const std::uint32_t> twin) {
+    std::vector<std::pair<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t>> sorted(edges.size());
+    for (std::size_t k = 0; k < edges.size(); ++k)
+        sorted[k] = {{std::min(edges[k].a, edges[k].b), std::max(edges[k].a, edges[k].b)}, std::uint32_t(k)};
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<std::uint32_t> map(edges.size());
+    for (std::size_t k = 0; k < edges.size(); ++k) {
+        const std::uint32_t ta = twin[edges[k].a], tb = twin[edges[k].b];
+        const std::pair key{std::min(ta, tb), std::max(ta, tb)};
+        const auto it = std::lower_bound(sorted.begin(), sorted.end(), std::pair{key, std::uint32_t{0}});
+        if (it == sorted.end() || it->first != key)
+            throw InvalidInput("mirror map: spring " + std::to_string(edges[k].a) + "-" + std::to_string(edges[k].b) +
+                               " has no mirror image " + std::to_string(key.first) + "-" + std::to_string(key.second));
+        map[k] = it->second;
+    }
+    return map;
+}
+
 void make_mirror_exact(Cloth& cloth, std::vector<std::uint32_t> twin) {
     const std::size_t n = cloth.particle_count;
     check_mirror_map(twin, n);
@@ -100,18 +118,11 @@ void make_mirror_exact(Cloth& cloth, std::vector<std::uint32_t> twin) {
         cloth.inv_mass[i] = cloth.inv_mass[twin[i]];
         if (!cloth.free_inv_mass.empty()) cloth.free_inv_mass[i] = cloth.free_inv_mass[twin[i]];
     }
-    // Springs (sorted by (a, b), cook_cloth): each takes its mirror image's figures where that comes first.
+    // Springs: each takes its mirror image's figures where that comes first.
     std::vector<Edge>& edges = cloth.edges;
+    const std::vector<std::uint32_t> edge_twin = mirror_edge_map(edges, twin);
     for (std::size_t k = 0; k < edges.size(); ++k) {
-        const std::uint32_t a = std::min(twin[edges[k].a], twin[edges[k].b]);
-        const std::uint32_t b = std::max(twin[edges[k].a], twin[edges[k].b]);
-        const auto it = std::lower_bound(edges.begin(), edges.end(), std::pair{a, b}, [](const Edge& e, const auto& key) {
-            return e.a != key.first ? e.a < key.first : e.b < key.second;
-        });
-        if (it == edges.end() || it->a != a || it->b != b)
-            throw InvalidInput("mirror map: spring " + std::to_string(edges[k].a) + "-" + std::to_string(edges[k].b) +
-                               " has no mirror image " + std::to_string(a) + "-" + std::to_string(b));
-        const std::size_t m = static_cast<std::size_t>(it - edges.begin());
+        const std::size_t m = edge_twin[k];
         if (m >= k) continue;
         edges[k].rest = edges[m].rest;
         edges[k].scale = edges[m].scale;

@@ -117,6 +117,26 @@ void Simulation::cook_self_collision() {
             sc_edges_[2 * e + 1] = std::uint32_t(keys[e] & 0xffffffffu);
         }
         const std::size_t edges = keys.size();
+        // A mirror-exact cloth (mirror_symmetry.hpp): each edge's mirror image, and an edge after its mirror image
+        // given the twins of that one's ends in the same order.
+        sc_edge_twin_.clear();
+        if (!cloth_.mirror.empty()) {
+            const std::vector<std::uint32_t>& twin = cloth_.mirror;
+            sc_edge_twin_.resize(edges);
+            for (std::size_t e = 0; e < edges && !sc_edge_twin_.empty(); ++e) {
+                const std::uint32_t a = twin[sc_edges_[2 * e]], b = twin[sc_edges_[2 * e + 1]];
+                const std::uint64_t key = std::uint64_t(std::min(a, b)) << 32 | std::max(a, b);
+                const auto it = std::lower_bound(keys.begin(), keys.end(), key);
+                if (it == keys.end() || *it != key) sc_edge_twin_.clear(); // not its own mirror image after all
+                else sc_edge_twin_[e] = std::uint32_t(it - keys.begin());
+            }
+            for (std::size_t e = 0; e < sc_edge_twin_.size(); ++e) {
+                const std::uint32_t m = sc_edge_twin_[e];
+                if (m >= e) continue;
+                sc_edges_[2 * e] = twin[sc_edges_[2 * m]];
+                sc_edges_[2 * e + 1] = twin[sc_edges_[2 * m + 1]];
+            }
+        }
         // The mean rest length of the structural springs (of all springs if there are none) sizes the patches. The
         // shortest rest length of the springs along triangle edges (structural and shear) decides whether 1-ring
         // neighbours are exempt; without such springs, the shortest triangle edge now.
@@ -396,7 +416,12 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
     const bool partners = sc_track_pushes_ && params_.solver != Solver::implicit; // for self_collide_hold
     const float dt = params_.dt, inv_dt = 1.0f / params_.dt;
     const std::uint32_t* tri = cloth_.triangles.data();
+    // The contacts read a triangle's corners in mirror order on a mirror-exact cloth (Cloth::mirror_corners), so that a
+    // pair and its mirror image take the same steps.
+    const std::uint32_t* corners = cloth_.mirror_corners.empty() ? tri : cloth_.mirror_corners.data();
     const std::uint32_t* edge = sc_edges_.data();
+    const std::uint32_t* edge_twin = sc_edge_twin_.empty() ? nullptr : sc_edge_twin_.data();
+    const std::uint32_t* twin = cloth_.mirror.empty() ? nullptr : cloth_.mirror.data();
     const float* w = cloth_.inv_mass.data();
     float *x = out.x.data(), *y = out.y.data(), *z = out.z.data();
     const SelfCollisionPatches& pa = sc_patches_;
@@ -541,22 +566,29 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
     std::uint32_t* hits = sc_hits_.data();
     // Adds what one contact asks of its (up to 4) particles: particle v[k] moves by coef[k] (push n) and its velocity
     // changes by coef[k] dv.
-    auto deposit = [&](const std::uint32_t* v, const double* coef, int count, V3 push, V3 dv) {
+    // `weight` scales it (1/2: one of the two halves of a pair taken both ways, counted once: `hit`).
+    auto deposit = [&](const std::uint32_t* v, const double* coef, int count, V3 push, V3 dv, double weight, bool hit) {
         for (int k = 0; k < count; ++k) {
             if (coef[k] == 0.0) continue;
-            const double c = coef[k] * fixed_scale;
+            const double c = weight * coef[k] * fixed_scale;
             const double d[6] = {c * push.x, c * push.y, c * push.z, c * dv.x, c * dv.y, c * dv.z};
             for (int f = 0; f < 6; ++f)
                 std::atomic_ref<std::int64_t>(acc[6 * std::size_t(v[k]) + f])
                     .fetch_add(std::llround(d[f]), std::memory_order_relaxed);
-            std::atomic_ref<std::uint32_t>(hits[v[k]]).fetch_add(1, std::memory_order_relaxed);
+            if (hit) std::atomic_ref<std::uint32_t>(hits[v[k]]).fetch_add(1, std::memory_order_relaxed);
         }
+    };
+    // A partner particle's rank for sc_partner_ (the lowest rank wins): its index, but on a mirror-exact cloth for a
+    // particle after its twin the index of the candidate's twin, so that twins choose twin partners.
+    auto partner_rank = [&](std::uint32_t i, std::uint32_t candidate) {
+        return twin && twin[i] < i ? twin[candidate] : candidate;
     };
     std::atomic<bool> deep_any{false};
     // A probe only asks whether any pair is a contact: the first one stops the search, and nothing is pushed.
     std::atomic<bool> stop{false};
     // The response of a pair with weights alpha (signed: + on the first side, - on the second) along unit n, gap d.
-    auto respond = [&](const std::uint32_t* v, const double* alpha, int count, V3 nrm, double d) {
+    auto respond = [&](const std::uint32_t* v, const double* alpha, int count, V3 nrm, double d, double weight = 1.0,
+                       bool hit = true) {
         double wsum = 0.0, coef[4];
         V3 vrel{0.0, 0.0, 0.0};
         for (int k = 0; k < count; ++k) {
@@ -581,7 +613,7 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
             const double cut = vtl > 0.0 ? std::min(mu * -vn, vtl) / vtl : 0.0;
             dv = -vn * nrm - cut * vt;
         }
-        deposit(v, coef, count, push, dv);
+        deposit(v, coef, count, push, dv, weight, hit);
         if (partners) // each pushed vertex: the other side's vertex of largest weight (the first of equals)
             for (int k = 0; k < count; ++k) {
                 if (coef[k] == 0.0) continue;
@@ -590,9 +622,10 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
                     if ((alpha[j] > 0.0) != (alpha[k] > 0.0) && (best < 0 || std::abs(alpha[j]) > std::abs(alpha[best])))
                         best = j;
                 if (best < 0) continue;
-                std::atomic_ref<std::uint32_t> slot(sc_partner_[v[k]]); // the lowest: the same in any order
+                std::atomic_ref<std::uint32_t> slot(sc_partner_[v[k]]); // the lowest rank: the same in any order
                 std::uint32_t cur = slot.load(std::memory_order_relaxed);
-                while (v[best] < cur && !slot.compare_exchange_weak(cur, v[best], std::memory_order_relaxed)) {
+                while ((cur == UINT32_MAX || partner_rank(v[k], v[best]) < partner_rank(v[k], cur)) &&
+                       !slot.compare_exchange_weak(cur, v[best], std::memory_order_relaxed)) {
                 }
             }
         return true;
@@ -604,7 +637,7 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
         const float* b = tri_box + 6 * std::size_t(s);
         const float px = x[p], py = y[p], pz = z[p];
         if (px < b[0] || px > b[3] || py < b[1] || py > b[4] || pz < b[2] || pz > b[5]) return 0;
-        const std::uint32_t* tv = tri + 3 * pa.tris[s];
+        const std::uint32_t* tv = corners + 3 * pa.tris[s];
         if (tv[0] == p || tv[1] == p || tv[2] == p) return 0;
         if (w[p] == 0.0f && w[tv[0]] == 0.0f && w[tv[1]] == 0.0f && w[tv[2]] == 0.0f) return 0;
         {
@@ -636,11 +669,15 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
         return respond(v, alpha, 4, nrm, geom::dot(diff, nrm)) ? 1 : 0;
     };
     // The edges in patch slots a and b: 1 when they were a contact. Taken in the order of their indices, so that the
-    // rounding of the response does not depend on how the cloth was cut into patches.
-    auto edge_edge = [&](std::uint32_t a, std::uint32_t b) -> std::size_t {
-        if (pa.edges[a] > pa.edges[b]) std::swap(a, b);
-        const float *be = edge_box + 6 * std::size_t(a), *bf = edge_box + 6 * std::size_t(b);
-        if (!boxes_meet(be, bf)) return 0;
+    // rounding of the response does not depend on how the cloth was cut into patches; on a mirror-exact cloth in the
+    // order of the lower index of each edge and its mirror image, so that a pair and its mirror image are taken alike,
+    // and an edge against its own mirror image both ways round, each half the response (the pair is its own mirror
+    // image: either order alone would treat the halves differently).
+    auto edge_rank = [&](std::uint32_t e) -> std::uint64_t {
+        if (!edge_twin) return e;
+        return std::uint64_t(std::min(e, edge_twin[e])) << 1 | (e > edge_twin[e] ? 1u : 0u);
+    };
+    auto edge_edge_ordered = [&](std::uint32_t a, std::uint32_t b, double weight, bool hit) -> std::size_t {
         const std::uint32_t *ev = edge + 2 * pa.edges[a], *fv = edge + 2 * pa.edges[b];
         if (fv[0] == ev[0] || fv[0] == ev[1] || fv[1] == ev[0] || fv[1] == ev[1]) return 0;
         if (w[ev[0]] == 0.0f && w[ev[1]] == 0.0f && w[fv[0]] == 0.0f && w[fv[1]] == 0.0f) return 0;
@@ -678,7 +715,17 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
         }
         const std::uint32_t v[4] = {ev[0], ev[1], fv[0], fv[1]};
         const double alpha[4] = {1.0 - s, s, -(1.0 - t), -t};
-        return respond(v, alpha, 4, nrm, geom::dot(diff, nrm)) ? 1 : 0;
+        return respond(v, alpha, 4, nrm, geom::dot(diff, nrm), weight, hit) ? 1 : 0;
+    };
+    auto edge_edge = [&](std::uint32_t a, std::uint32_t b) -> std::size_t {
+        if (edge_rank(pa.edges[a]) > edge_rank(pa.edges[b])) std::swap(a, b);
+        const float *be = edge_box + 6 * std::size_t(a), *bf = edge_box + 6 * std::size_t(b);
+        if (!boxes_meet(be, bf)) return 0;
+        if (edge_twin && edge_twin[pa.edges[a]] == pa.edges[b]) {
+            const std::size_t first = edge_edge_ordered(a, b, 0.5, true);
+            return first | edge_edge_ordered(b, a, 0.5, first == 0);
+        }
+        return edge_edge_ordered(a, b, 1.0, true);
     };
     // Every pair of patches p <= q: the points of each against the triangles of the other, the edges against the
     // edges (p == q: each pair of its own once). Of two different patches only the points and edges inside the other
@@ -816,6 +863,7 @@ template <bool Parallel> void Simulation::self_collide_hold(StateBuffer& out) {
     const float mu = params_.self_collision.friction;
     const float* w = cloth_.inv_mass.data(); // a particle pinned (or grabbed) since the run stays where it is held
     const std::size_t n = cloth_.particle_count;
+    const std::uint32_t* twin = cloth_.mirror.empty() ? nullptr : cloth_.mirror.data();
     // First every plane where its partner has carried it (the partner's move since the snapshot, along the normal) and
     // the partner's velocity, read before any particle is moved (so the result does not depend on the order).
     float* c = sc_side_x_.data();
@@ -829,9 +877,14 @@ template <bool Parallel> void Simulation::self_collide_hold(StateBuffer& out) {
                 c[i] = sc_plane_c_[i], pu[i] = pv[i] = pw[i] = 0.0f;
                 continue;
             }
-            c[i] = sc_plane_c_[i] + nx * (out.x[q] - sc_snap_x_[q]) + ny * (out.y[q] - sc_snap_y_[q]) +
-                   nz * (out.z[q] - sc_snap_z_[q]);
-            pu[i] = out.u[q], pv[i] = out.v[q], pw[i] = out.w[q];
+            // A particle on the mirror line of a mirror-exact cloth: its partner and the partner's twin, averaged (the
+            // partner alone would pull it to one side).
+            const std::uint32_t r = twin && twin[i] == i ? twin[q] : q;
+            const auto mean = [](float a, float b) { return 0.5f * (a + b); };
+            c[i] = sc_plane_c_[i] + nx * mean(out.x[q] - sc_snap_x_[q], out.x[r] - sc_snap_x_[r]) +
+                   ny * mean(out.y[q] - sc_snap_y_[q], out.y[r] - sc_snap_y_[r]) +
+                   nz * mean(out.z[q] - sc_snap_z_[q], out.z[r] - sc_snap_z_[r]);
+            pu[i] = mean(out.u[q], out.u[r]), pv[i] = mean(out.v[q], out.v[r]), pw[i] = mean(out.w[q], out.w[r]);
         }
     });
     float* held = sc_block_moved_.data(); // per block: 1 when it put a particle back (the move test is done with it)

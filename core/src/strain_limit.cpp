@@ -33,6 +33,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "drape/mirror_symmetry.hpp"
 #include "drape/simulation.hpp"
 #include "strain_limit_sweep.hpp"
 
@@ -90,6 +91,17 @@ void Simulation::cook_strain_limit() {
     std::stable_sort(limited.begin(), limited.end(),
                      [&](std::uint32_t l, std::uint32_t r) { return spring_level(l) < spring_level(r); });
 
+    // A mirror-exact cloth (mirror_symmetry.hpp): each spring coloured with its mirror image, so that the sweeps
+    // treat the halves alike, when every mirror pair of springs is on one level (pins placed mirror-symmetrically).
+    std::vector<std::uint32_t> edge_twin;
+    if (!cloth_.mirror.empty()) {
+        edge_twin = mirror_edge_map(cloth_.edges, cloth_.mirror);
+        for (std::uint32_t k : limited)
+            if (spring_level(edge_twin[k]) != spring_level(k)) {
+                edge_twin.clear();
+                break;
+            }
+    }
     limit_groups_ = ColourGroups{};
     limit_groups_.group_offsets.push_back(0);
     limit_serial_.clear();
@@ -97,7 +109,8 @@ void Simulation::cook_strain_limit() {
     for (std::size_t begin = 0; begin < limited.size();) {
         std::size_t end = begin;
         while (end < limited.size() && spring_level(limited[end]) == spring_level(limited[begin])) ++end;
-        const ColourGroups g = colour_edges(cloth_.edges, n, std::span(limited).subspan(begin, end - begin));
+        const ColourGroups g = colour_edges(cloth_.edges, n, std::span(limited).subspan(begin, end - begin),
+                                            colouring_max_colours, edge_twin);
         for (std::size_t k = 0; k < g.group_count(); ++k) {
             // Shear springs last (no two springs of a colour group share a particle, so the order within one does
             // not change the result; an overflow group keeps its order by running whole in either form).
@@ -146,6 +159,23 @@ void Simulation::cook_strain_limit() {
         if (e.kind == SpringKind::seam) {
             limit_seam_slot_.push_back(static_cast<std::uint32_t>(k));
             limit_seam_edge_.push_back(limit_groups_.edge_index[k]);
+        }
+    }
+    // The two springs of a mirror pair that meet at a particle on the mirror line (adjacent in their group: the
+    // only two springs of a conflict-free group that share a particle) are solved together.
+    limit_pair_.clear();
+    if (!edge_twin.empty()) {
+        limit_pair_.assign(count, 0);
+        const auto shares = [&](std::size_t k) {
+            return limit_a_[k] == limit_a_[k + 1] || limit_a_[k] == limit_b_[k + 1] || limit_b_[k] == limit_a_[k + 1] ||
+                   limit_b_[k] == limit_b_[k + 1];
+        };
+        for (std::uint32_t g = 0; g < limit_groups_.group_count(); ++g) {
+            if (limit_serial_[g]) continue;
+            for (const auto [lo, hi] : {std::pair{limit_groups_.group_offsets[g], limit_shear_begin_[g]},
+                                        std::pair{limit_shear_begin_[g], limit_groups_.group_offsets[g + 1]}})
+                for (std::size_t k = lo; k + 1 < hi; ++k)
+                    if (shares(k)) limit_pair_[k] = strain_limit::pair_first, limit_pair_[++k] = strain_limit::pair_second;
         }
     }
     update_limit_levels();
@@ -214,6 +244,7 @@ template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, b
                          limit_particle_group_offsets_.data(),
                          limit_particle_groups_.data(),
                          limit_group_moved_.data()};
+    c.pair = limit_pair_.empty() ? nullptr : limit_pair_.data();
     const std::size_t groups = limit_groups_.group_count();
     // At least `passes` sweeps; more (up to strain_limit_max_passes) while a sweep still found a spring over
     // 1.05 x the limit, so a limit that can hold does (the JSON of `drape run` reports what was honoured).

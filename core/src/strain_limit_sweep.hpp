@@ -50,6 +50,20 @@ struct Args {
     /// Frame form: the end nearer the fixed particles stays (the first strain_limit_one_sided_passes sweeps of a
     /// step), else both ends move by inverse mass.
     bool one_sided = true;
+    /// A mirror-exact cloth: per spring pair_first / pair_second for the two springs that meet at a particle on the
+    /// mirror line (adjacent slots of a colour group, solved together), else 0; null on other cloths.
+    const std::uint8_t* __restrict pair = nullptr;
+};
+
+/// Args::pair's values.
+inline constexpr std::uint8_t pair_first = 1, pair_second = 2;
+
+/// A spring's correction, found before it is applied (so two springs can be found from the same positions).
+struct Correction {
+    std::uint32_t ia, ib;
+    float dx, dy, dz; ///< x_b - x_a
+    float ea, eb;     ///< x_a += ea d, x_b -= eb d
+    bool velocities;  ///< the velocities follow
 };
 
 /// Spring k: d = x_b - x_a, l = |d|; over l_max = stretch rest its ends move toward each other by the excess (frame
@@ -57,7 +71,8 @@ struct Args {
 /// longer than the tolerated stretch, plus `moved` if its ends were moved. Frame: the implicit solver's form
 /// (c.inner set), else the explicit solver's.
 inline constexpr unsigned over = 1, moved = 2;
-template <bool Frame> inline unsigned limit_spring(const Args& c, std::size_t k) noexcept {
+/// Finds spring k's correction (into `out` when the result has `moved`) without applying it.
+template <bool Frame> inline unsigned find_correction(const Args& c, std::size_t k, Correction& out) noexcept {
     if (Frame && (c.inner[k] & shear)) return 0; // the implicit solver limits no shear spring
     const std::uint32_t ia = c.a[k], ib = c.b[k];
     const float dx = c.x[ib] - c.x[ia], dy = c.y[ib] - c.y[ia], dz = c.z[ib] - c.z[ia];
@@ -86,17 +101,6 @@ template <bool Frame> inline unsigned limit_spring(const Args& c, std::size_t k)
     if (wsum == 0.0f) return is_over;
     const float l = std::sqrt(l2);
     const float e = (l - l_max) / (l * wsum);
-    const float ea = wa * e, eb = wb * e;
-    // Moves a's entry of (px, py, pz) by sa d and b's by -sb d: the positions, then (explicit form) the velocities.
-    const auto toward = [&](float* px, float* py, float* pz, float sa, float sb) {
-        px[ia] += sa * dx;
-        py[ia] += sa * dy;
-        pz[ia] += sa * dz;
-        px[ib] -= sb * dx;
-        py[ib] -= sb * dy;
-        pz[ib] -= sb * dz;
-    };
-    toward(c.x, c.y, c.z, ea, eb);
     // Frame form: positions only, but in a part of the cloth that no fixed particle is connected to (a garment
     // without pins: every correction there moves both ends by inverse mass, the mass-orthogonal projection), where
     // the velocities follow as in the explicit form (v += dx / h): momentum is kept and kinetic energy only removed.
@@ -107,9 +111,41 @@ template <bool Frame> inline unsigned limit_spring(const Args& c, std::size_t k)
     // without slowing the near one (the whip of issue 10), and two-sided ones beside the positions-only ones next to
     // a pin gathered every sweep's pull into a particle's velocity (a 48 x 48 hang dragged out of reach: 3,736 J in
     // 2 steps). docs/implicit.md, "Velocities after a correction of an unpinned cloth".
-    if (Frame && !(c.inner[k] & unpinned)) return is_over | moved;
-    toward(c.u, c.v, c.w, ea * c.vel_scale, eb * c.vel_scale);
+    out = Correction{ia, ib, dx, dy, dz, wa * e, wb * e, !Frame || (c.inner[k] & unpinned) != 0};
     return is_over | moved;
+}
+
+/// Applies a correction: the positions, then (if they follow) the velocities.
+inline void apply_correction(const Args& c, const Correction& r) noexcept {
+    // Moves a's entry of (px, py, pz) by sa d and b's by -sb d.
+    const auto toward = [&](float* px, float* py, float* pz, float sa, float sb) {
+        px[r.ia] += sa * r.dx;
+        py[r.ia] += sa * r.dy;
+        pz[r.ia] += sa * r.dz;
+        px[r.ib] -= sb * r.dx;
+        py[r.ib] -= sb * r.dy;
+        pz[r.ib] -= sb * r.dz;
+    };
+    toward(c.x, c.y, c.z, r.ea, r.eb);
+    if (r.velocities) toward(c.u, c.v, c.w, r.ea * c.vel_scale, r.eb * c.vel_scale);
+}
+
+template <bool Frame> inline unsigned limit_spring(const Args& c, std::size_t k) noexcept {
+    Correction r;
+    const unsigned result = find_correction<Frame>(c, k, r);
+    if (result & moved) apply_correction(c, r);
+    return result;
+}
+
+/// Springs k and k + 1, which meet at a particle on the mirror line (Args::pair): both corrections found from the
+/// same positions, then applied, so the two halves of a mirror-symmetric state are treated alike (one after the
+/// other, the second would see the first's move of the shared particle).
+template <bool Frame> inline unsigned limit_pair(const Args& c, std::size_t k) noexcept {
+    Correction r0, r1;
+    const unsigned f0 = find_correction<Frame>(c, k, r0), f1 = find_correction<Frame>(c, k + 1, r1);
+    if (f0 & moved) apply_correction(c, r0);
+    if (f1 & moved) apply_correction(c, r1);
+    return f0 | f1;
 }
 
 /// Stamps every group holding a spring of particle i with seq. Chunks of one group run in parallel and all store
@@ -124,6 +160,14 @@ inline void mark_moved(const Args& c, std::uint32_t i, std::uint64_t seq) noexce
 template <bool Frame> inline bool sweep(const Args& c, std::size_t begin, std::size_t end, std::uint64_t seq) noexcept {
     unsigned any = 0;
     for (std::size_t k = begin; k < end; ++k) {
+        if (c.pair && c.pair[k] == pair_second) continue; // solved with the slot before (in this range or the last)
+        if (c.pair && c.pair[k] == pair_first) {
+            const unsigned r = limit_pair<Frame>(c, k);
+            if (r & moved)
+                for (std::size_t s = k; s <= k + 1; ++s) mark_moved(c, c.a[s], seq), mark_moved(c, c.b[s], seq);
+            any |= r;
+            continue;
+        }
         const unsigned r = limit_spring<Frame>(c, k);
         if (r & moved) {
             mark_moved(c, c.a[k], seq);

@@ -49,8 +49,16 @@ struct ColourGroups {
 /// cloth); otherwise all edges are coloured in order. max_colours: 1..64. Throws InvalidInput on an edge
 /// naming a particle out of range, a self loop, a subset index out of range or repeated, or max_colours out
 /// of range.
+///
+/// `edge_twin`, when not empty, is a mirror map of the edges (one entry per edge, mirror_edge_map in
+/// mirror_symmetry.hpp): each edge is coloured together with its mirror image (same group, placed right after it;
+/// groups then keep the visiting order), so a sweep over the groups treats the two halves of a mirror-symmetric cloth
+/// alike. An edge and its mirror image that meet at a particle on the mirror line share a group anyway (the only two
+/// edges of a conflict-free group that share a particle): the caller solves them together. Throws InvalidInput if an
+/// edge's mirror image is not among the edges coloured.
 ColourGroups colour_edges(std::span<const Edge> edges, std::size_t particle_count,
                           std::span<const std::uint32_t> subset = {},
-                          std::uint32_t max_colours = colouring_max_colours);
+                          std::uint32_t max_colours = colouring_max_colours,
+                          std::span<const std::uint32_t> edge_twin = {});
 
 } // namespace drape

@@ -11,6 +11,8 @@
 #include <span>
 #include <vector>
 
+#include "drape/spring_graph.hpp"
+
 namespace drape {
 
 struct Cloth;
@@ -33,6 +35,10 @@ std::vector<std::uint32_t> mirror_row_order(std::uint32_t i, std::uint32_t t, st
 /// the twins of its corners). Throws InvalidInput naming a triangle that has none.
 std::vector<std::uint32_t> mirror_triangle_map(std::span<const std::uint32_t> triangles,
                                                std::span<const std::uint32_t> twin);
+
+/// For each spring of `edges`, the index of its mirror image (the spring joining the twins of its ends, in either
+/// order; a spring across the mirror line or along it is its own). Throws InvalidInput naming a spring that has none.
+std::vector<std::uint32_t> mirror_edge_map(std::span<const Edge> edges, std::span<const std::uint32_t> twin);
 
 /// Makes `cloth` mirror-exact about the map `twin` (check_mirror_map): every pair's inverse masses, every mirror
 /// pair of springs' rest lengths and stiffness scales, and every bending coefficient set to the lower-indexed

@@ -388,6 +388,9 @@ class Simulation {
     /// Per limited spring, flags for the implicit solver's limit (core/src/strain_limit.cpp): which end is nearer the
     /// fixed particles (it moves only the far end), and whether it is a shear spring (not limited there).
     std::vector<std::uint8_t> limit_inner_;
+    /// A mirror-exact cloth (Cloth::mirror): per limited spring strain_limit::pair_first / pair_second for the two
+    /// springs meeting at a particle on the mirror line, solved together; empty on other cloths.
+    std::vector<std::uint8_t> limit_pair_;
     /// The limited springs' adjacency, and breadth-first levels and queue (cooked once; update_limit_levels).
     std::vector<std::uint32_t> limit_adj_offsets_, limit_adj_, limit_level_, limit_queue_;
     std::vector<float> limit_rest_;
@@ -464,7 +467,11 @@ class Simulation {
     template <bool Parallel>
     float self_collide_relative_motion(const StateBuffer& out, const float* xa, const float* ya, const float* za);
     void cook_self_collision();
-    std::vector<std::uint32_t> sc_edges_;            ///< 2 per edge, a < b
+    /// 2 per edge, a < b; on a mirror-exact cloth an edge after its mirror image holds the twins of that one's ends,
+    /// in the same order (so that the two take the same steps).
+    std::vector<std::uint32_t> sc_edges_;
+    /// A mirror-exact cloth (Cloth::mirror): each edge of sc_edges_'s mirror image; empty otherwise.
+    std::vector<std::uint32_t> sc_edge_twin_;
     std::vector<std::uint32_t> sc_sewn_; ///< per particle: the lowest particle sewn to it through seams (itself if none)
     std::vector<std::uint32_t> sc_ring_start_, sc_ring_; ///< per particle: sc_sewn_ of its triangles' particles (CSR)
     SelfCollisionPatches sc_patches_;
