@@ -4,6 +4,7 @@
 //   drape_shirt [field=value ...]: cells_per_metre= (resolution, 10..1000), strain_limit= (ratio, 0 = off),
 //   seam_rest= (seam rest length over the spacing), sewing_speed= (m/s), seconds= (run length, default 3),
 //   solver=implicit, mirror_exact=1 (TShirtParams::mirror_exact), self_collision= (thickness in m, 0 = off), early=1 (also after the first 1, 2, 3, 10, 20, 50, 100, 200 and 500 substeps)
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -18,9 +19,10 @@ namespace {
 void print(const char* when, const drape::Simulation& sim, const drape::GarmentFigures& f) {
     const std::array<double, 3> o = sim.cloth().origin;
     std::printf("%s: longest seam %.4f m, mirror error %.3g m at particle %zu (%.3f %.3f %.3f), rms %.3g m, %zu beyond "
-                "5 mm, inside the body %zu, finite %s\n",
+                "5 mm, inside the body %zu, finite %s, limited stretch %.3f, kinetic energy %.3g J\n",
                 when, f.longest_seam, f.mirror_error, f.worst, sim.x()[f.worst] + o[0], sim.y()[f.worst] + o[1],
-                sim.z()[f.worst] + o[2], f.mirror_rms, f.beyond, f.inside, f.finite ? "yes" : "no");
+                sim.z()[f.worst] + o[2], f.mirror_rms, f.beyond, f.inside, f.finite ? "yes" : "no",
+                double(sim.health().max_limited_stretch), sim.health().kinetic_energy);
 }
 
 } // namespace
@@ -34,15 +36,28 @@ int main(int argc, char** argv) try {
         const auto eq = a.find('=');
         if (eq == std::string::npos) throw std::runtime_error("expected field=value: " + a);
         const std::string key = a.substr(0, eq), value = a.substr(eq + 1);
-        if (key == "cells_per_metre") spec.tshirt.cells_per_metre = std::stof(value);
-        else if (key == "strain_limit") spec.physics.strain_limit.ratio = std::stof(value);
-        else if (key == "seam_rest") spec.tshirt.seam_rest_ratio = std::stof(value);
-        else if (key == "sewing_speed") spec.physics.sewing_speed = std::stof(value);
-        else if (key == "seconds") seconds = std::stod(value);
+        // A number for the numeric fields, the whole value (std::stof alone takes "7x" as 7 and names no field).
+        const auto number = [&] {
+            std::size_t used = 0;
+            float v = 0.0f;
+            try {
+                v = std::stof(value, &used);
+            } catch (const std::exception&) {
+                used = 0;
+            }
+            if (used == 0 || used != value.size() || !std::isfinite(v))
+                throw std::runtime_error(key + "=" + value + " is not a number");
+            return v;
+        };
+        if (key == "cells_per_metre") spec.tshirt.cells_per_metre = number();
+        else if (key == "strain_limit") spec.physics.strain_limit.ratio = number();
+        else if (key == "seam_rest") spec.tshirt.seam_rest_ratio = number();
+        else if (key == "sewing_speed") spec.physics.sewing_speed = number();
+        else if (key == "seconds") seconds = number();
         else if (key == "solver" && value == "implicit") spec.physics.solver = drape::Solver::implicit;
         else if (key == "early") early = value != "0";
         else if (key == "mirror_exact") spec.tshirt.mirror_exact = value != "0";
-        else if (key == "self_collision") spec.physics.self_collision.thickness = std::stof(value);
+        else if (key == "self_collision") spec.physics.self_collision.thickness = number();
         else throw std::runtime_error("unknown field " + a);
     }
     if (!(seconds > 0.0 && seconds <= 1000.0)) throw std::runtime_error("seconds must be in (0, 1000]");

@@ -15,6 +15,21 @@
 
 using namespace drape;
 
+namespace {
+
+// Every particle exactly at its twin's mirror image (x -> -x), bit for bit.
+void expect_mirror_image(const Simulation& sim, const std::vector<std::uint32_t>& twin) {
+    const auto x = sim.x(), y = sim.y(), z = sim.z();
+    for (std::size_t i = 0; i < twin.size(); ++i) {
+        const std::size_t j = twin[i];
+        ASSERT_TRUE(x[i] == -x[j] && y[i] == y[j] && z[i] == z[j])
+            << "at " << sim.time() << " s particle " << i << " (" << x[i] << ", " << y[i] << ", " << z[i]
+            << ") and its twin " << j << " (" << x[j] << ", " << y[j] << ", " << z[j] << ")";
+    }
+}
+
+} // namespace
+
 TEST(MirrorSymmetry, MapsThatAreNotInvolutionsAreRefused) {
     const std::vector<std::uint32_t> ok{2, 1, 0};
     EXPECT_NO_THROW(check_mirror_map(ok, 3));
@@ -92,13 +107,7 @@ TEST(MirrorSymmetry, TShirtStaysItsOwnMirrorImageBitForBit) {
     std::size_t contact_steps = 0;
     for (int k = 0; k < 30; ++k) { // 1.5 s in 50 ms pieces
         sim.step(static_cast<std::size_t>(0.05 / sim.params().dt));
-        const auto x = sim.x(), y = sim.y(), z = sim.z();
-        for (std::size_t i = 0; i < twin.size(); ++i) {
-            const std::size_t j = twin[i];
-            ASSERT_TRUE(x[i] == -x[j] && y[i] == y[j] && z[i] == z[j])
-                << "at " << sim.time() << " s particle " << i << " (" << x[i] << ", " << y[i] << ", " << z[i]
-                << ") and its twin " << j << " (" << x[j] << ", " << y[j] << ", " << z[j] << ")";
-        }
+        ASSERT_NO_FATAL_FAILURE(expect_mirror_image(sim, twin));
         if (garment_figures(sim, twin).longest_seam < 0.01) ++contact_steps;
     }
     EXPECT_TRUE(sim.health().finite);
@@ -120,13 +129,7 @@ TEST(MirrorSymmetry, FinerTShirtWithStrainLimitAndSelfCollisionStaysItsOwnMirror
     Simulation sim(std::move(b.cloth), b.initial, b.params);
     for (int k = 0; k < 24; ++k) {
         sim.step(static_cast<std::size_t>(0.05 / sim.params().dt));
-        const auto x = sim.x(), y = sim.y(), z = sim.z();
-        for (std::size_t i = 0; i < twin.size(); ++i) {
-            const std::size_t j = twin[i];
-            ASSERT_TRUE(x[i] == -x[j] && y[i] == y[j] && z[i] == z[j])
-                << "at " << sim.time() << " s particle " << i << " (" << x[i] << ", " << y[i] << ", " << z[i]
-                << ") and its twin " << j << " (" << x[j] << ", " << y[j] << ", " << z[j] << ")";
-        }
+        ASSERT_NO_FATAL_FAILURE(expect_mirror_image(sim, twin));
     }
     EXPECT_TRUE(sim.health().finite);
     EXPECT_GT(sim.health().max_limited_stretch, 0.0) << "the strain limit had nothing to do";

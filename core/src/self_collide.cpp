@@ -48,6 +48,7 @@
 #include "closest_points.hpp"
 #include "self_collide_hash.hpp"
 #include "self_collide_patches.hpp"
+#include "drape/mirror_symmetry.hpp"
 #include "drape/simulation.hpp"
 
 namespace drape {
@@ -117,20 +118,16 @@ void Simulation::cook_self_collision() {
             sc_edges_[2 * e + 1] = std::uint32_t(keys[e] & 0xffffffffu);
         }
         const std::size_t edges = keys.size();
-        // A mirror-exact cloth (mirror_symmetry.hpp): each edge's mirror image, and an edge after its mirror image
-        // given the twins of that one's ends in the same order.
+        // A mirror-exact cloth (mirror_symmetry.hpp): each edge's mirror image (its triangles are mirror images,
+        // make_mirror_exact checked), and an edge after its mirror image given the twins of that one's ends in the
+        // same order.
         sc_edge_twin_.clear();
         if (!cloth_.mirror.empty()) {
             const std::vector<std::uint32_t>& twin = cloth_.mirror;
-            sc_edge_twin_.resize(edges);
-            for (std::size_t e = 0; e < edges && !sc_edge_twin_.empty(); ++e) {
-                const std::uint32_t a = twin[sc_edges_[2 * e]], b = twin[sc_edges_[2 * e + 1]];
-                const std::uint64_t key = std::uint64_t(std::min(a, b)) << 32 | std::max(a, b);
-                const auto it = std::lower_bound(keys.begin(), keys.end(), key);
-                if (it == keys.end() || *it != key) sc_edge_twin_.clear(); // not its own mirror image after all
-                else sc_edge_twin_[e] = std::uint32_t(it - keys.begin());
-            }
-            for (std::size_t e = 0; e < sc_edge_twin_.size(); ++e) {
+            std::vector<Edge> as_edges(edges);
+            for (std::size_t e = 0; e < edges; ++e) as_edges[e].a = sc_edges_[2 * e], as_edges[e].b = sc_edges_[2 * e + 1];
+            sc_edge_twin_ = mirror_edge_map(as_edges, twin);
+            for (std::size_t e = 0; e < edges; ++e) {
                 const std::uint32_t m = sc_edge_twin_[e];
                 if (m >= e) continue;
                 sc_edges_[2 * e] = twin[sc_edges_[2 * m]];
