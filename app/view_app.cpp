@@ -47,7 +47,7 @@ void mouse_button_cb(GLFWwindow* w, int button, int action, int mods) {
     if (!scripted_mouse) viewer_of(w)->on_mouse_button(button, action, mods);
 }
 void cursor_cb(GLFWwindow* w, double x, double y) {
-    if (!scripted_mouse) viewer_of(w)->on_cursor(x, y);
+    if (!scripted_mouse) viewer_of(w)->on_cursor_event(x, y);
 }
 void scroll_cb(GLFWwindow* w, double, double dy) {
     viewer_of(w)->on_scroll(dy);
@@ -283,11 +283,24 @@ void Viewer::start_grab(const PickHit& hit, double x, double y) {
 
 void Viewer::on_mouse_button(int button, int action, int mods) {
     // Queued: whether a press belongs to a panel is decided after ImGui::NewFrame() (handle_input_events).
-    if (action == GLFW_PRESS || action == GLFW_RELEASE) pending_buttons_.push_back({button, action, mods});
+    if (action == GLFW_PRESS || action == GLFW_RELEASE) pending_mouse_.push_back({button, action, mods});
+}
+
+void Viewer::on_cursor_event(double x, double y) {
+    // A move after a queued button waits behind it: a press, a drag and a release that all arrive in one poll (a
+    // frame that waited for a long step) still orbit, pan or grab, from where the press was.
+    if (pending_mouse_.empty())
+        on_cursor(x, y);
+    else
+        pending_mouse_.push_back({0, cursor_moved_to, 0, x, y});
 }
 
 void Viewer::handle_input_events() {
-    for (const InputEvent& e : pending_buttons_) {
+    for (const InputEvent& e : pending_mouse_) {
+        if (e.action == cursor_moved_to) {
+            on_cursor(e.x, e.y);
+            continue;
+        }
         const int bit = 1 << std::clamp(e.code, 0, 15);
         if (e.action == GLFW_PRESS) {
             // The first button down decides who owns the drag until every button is up: a slider dragged past
@@ -302,7 +315,7 @@ void Viewer::handle_input_events() {
             if (buttons_down_ == 0) ui_owns_press_ = false;
         }
     }
-    pending_buttons_.clear();
+    pending_mouse_.clear();
     for (const InputEvent& e : pending_keys_) {
         if (e.code == GLFW_KEY_F1 && e.action == GLFW_PRESS) {
             show_help_ = !show_help_;
@@ -565,7 +578,7 @@ void Viewer::note_session_error() {
 }
 
 bool Viewer::may_draw_beside_step(bool last_frame) const {
-    if (!(interpolate_ && step_running_ && !last_frame && !session_->step_ready() && pending_buttons_.empty() &&
+    if (!(interpolate_ && step_running_ && !last_frame && !session_->step_ready() && pending_mouse_.empty() &&
           pending_keys_.empty() && !grab_move_deferred_ && dropped_.empty() &&
           session_->generation() == interpolator_generation_))
         return false;

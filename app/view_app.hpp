@@ -66,6 +66,7 @@ class Viewer {
 
     // GLFW callbacks (forwarded from static trampolines; also driven by the demo script).
     void on_mouse_button(int button, int action, int mods);
+    void on_cursor_event(double x, double y); ///< GLFW's cursor callback: applied now, or queued behind a button
     void on_cursor(double x, double y);
     void on_scroll(double dy);
     void on_key(int key, int action, int mods);
@@ -158,9 +159,12 @@ class Viewer {
     enum class Drag { none, orbit, pan, grab };
     Drag drag_ = Drag::none;
     struct InputEvent {
-        int code, action, mods; ///< button or key
+        int code, action, mods; ///< button or key; action cursor_moved_to: a cursor move to (x, y)
+        double x = 0.0, y = 0.0;
     };
-    std::vector<InputEvent> pending_buttons_, pending_keys_;
+    static constexpr int cursor_moved_to = -1;
+    /// Mouse buttons, and the cursor moves that follow a queued button, in the order they came; keys.
+    std::vector<InputEvent> pending_mouse_, pending_keys_;
     int buttons_down_ = 0;      ///< bit per mouse button held
     bool ui_owns_press_ = false; ///< the buttons held went down over a panel: ImGui's until all are released
     double cursor_x_ = 0.0, cursor_y_ = 0.0;

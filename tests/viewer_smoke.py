@@ -250,14 +250,16 @@ def drive_blended_grab(drape):
         time.sleep(0.5)
         xdo("mouseup", "1")
         time.sleep(0.5)
-        # Orbit: a left drag on the empty background, right of the cloth.
+        # Orbit: a left drag on the empty background, right of the cloth, sent as one burst (one xdotool command,
+        # well under a millisecond), so the press, the moves and the release reach the viewer in the same poll
+        # of events, as a quick drag does while a frame waits for a long step. (Until 2026-12-07 the moves were
+        # applied before the queued press and the drag was lost: this check failed whenever a step outlasted it.)
         xdo("mousemove", "--window", wid, w - 40, h // 2)
         time.sleep(0.3)
-        xdo("mousedown", "1")
+        burst = ["mousedown", "1"]
         for dx in range(10, 210, 20):
-            xdo("mousemove", "--window", wid, w - 40 - dx, h // 2)
-            time.sleep(0.05)
-        xdo("mouseup", "1")
+            burst += ["mousemove", "--window", wid, w - 40 - dx, h // 2]
+        xdo(*burst, "mouseup", "1")
         time.sleep(2.0)
         stats = quit_driven_viewer(proc, wid, "the driven blended viewer")
     if stats is None:
