@@ -136,13 +136,15 @@ TEST(MirrorSymmetry, FinerTShirtWithStrainLimitAndSelfCollisionStaysItsOwnMirror
     EXPECT_LT(garment_figures(sim, twin).longest_seam, 0.005) << "the shirt was not sewn";
 }
 
-TEST(MirrorSymmetry, SceneFilesSwitchItOnAndOtherClothsStayAsTheyWere) {
-    const SceneSpec on = parse_scene(R"({"cloth": {"type": "tshirt", "mirror_exact": true}})", "test");
-    EXPECT_TRUE(on.tshirt.mirror_exact);
+TEST(MirrorSymmetry, OnByDefaultAndSceneFilesSwitchItOff) {
+    const SceneSpec on = load_scene("tshirt");
+    EXPECT_TRUE(on.tshirt.mirror_exact) << "the built-in shirt is mirror-exact";
     EXPECT_FALSE(build_scene(on).cloth.mirror.empty());
     EXPECT_TRUE(parse_scene(scene_to_json(on), "written").tshirt.mirror_exact) << "a saved scene keeps it";
-    const SceneSpec off = load_scene("tshirt");
+    const SceneSpec off = parse_scene(R"({"cloth": {"type": "tshirt", "mirror_exact": false}})", "test");
     EXPECT_FALSE(off.tshirt.mirror_exact);
-    EXPECT_TRUE(build_scene(off).cloth.mirror.empty()) << "the default shirt keeps its bits";
+    EXPECT_TRUE(build_scene(off).cloth.mirror.empty()) << "switched off: no mirror map";
+    EXPECT_FALSE(parse_scene(scene_to_json(off), "written").tshirt.mirror_exact) << "a saved scene keeps it off";
+    EXPECT_TRUE(build_scene(load_scene("hang")).cloth.mirror.empty()) << "other cloths have no mirror map";
     EXPECT_THROW(parse_scene(R"({"cloth": {"type": "tshirt", "mirror_exact": 1}})", "test"), InvalidInput);
 }

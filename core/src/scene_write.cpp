@@ -123,7 +123,7 @@ std::string cloth_json(const SceneSpec& s, const std::filesystem::path& relative
         f.add("type", str("tshirt")).add("cells_per_metre", num(t.cells_per_metre));
         if (s.model == MaterialModel::springs) f.add("mass", num(t.total_mass));
         f.add("shoulder_y", num(t.shoulder_y)).add("gap", num(t.gap)).add("seam_rest_ratio", num(t.seam_rest_ratio));
-        if (t.mirror_exact) f.add("mirror_exact", boolean(true));
+        f.add("mirror_exact", boolean(t.mirror_exact));
         break;
     }
     case ClothType::outline: {

@@ -112,6 +112,26 @@ void Simulation::cook_self_collision() {
             sc_ring_.insert(sc_ring_.end(), ring.begin(), ring.end());
             sc_ring_start_[u + 1] = std::uint32_t(sc_ring_.size());
         }
+        // The points that hold several particles: a contact moves such a point as one (its mass the sum of theirs),
+        // so that self-collision never pulls a seam open (docs/self_collision.md, "Seams").
+        sc_group_start_.assign(1, 0);
+        sc_group_.clear();
+        {
+            std::vector<std::uint32_t> size(n, 0);
+            for (std::size_t i = 0; i < n; ++i) ++size[sc_sewn_[i]];
+            std::vector<std::uint32_t> slot(n, UINT32_MAX);
+            std::vector<std::uint32_t> order;
+            for (std::uint32_t r = 0; r < n; ++r)
+                if (size[r] > 1) {
+                    slot[r] = std::uint32_t(sc_group_start_.size() - 1);
+                    sc_group_start_.push_back(sc_group_start_.back() + size[r]);
+                }
+            sc_group_.resize(sc_group_start_.back());
+            std::vector<std::uint32_t> fill(sc_group_start_.begin(), sc_group_start_.end() - 1);
+            for (std::uint32_t i = 0; i < n; ++i) // ascending: each point's particles in index order
+                if (slot[sc_sewn_[i]] != UINT32_MAX) sc_group_[fill[slot[sc_sewn_[i]]]++] = i;
+        }
+        sc_contact_w_.assign(sc_group_.empty() ? 0 : n, 0.0f);
         sc_edges_.resize(2 * keys.size());
         for (std::size_t e = 0; e < keys.size(); ++e) {
             sc_edges_[2 * e] = std::uint32_t(keys[e] >> 32);
@@ -419,7 +439,24 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
     const std::uint32_t* edge = sc_edges_.data();
     const std::uint32_t* edge_twin = sc_edge_twin_.empty() ? nullptr : sc_edge_twin_.data();
     const std::uint32_t* twin = cloth_.mirror.empty() ? nullptr : cloth_.mirror.data();
+    // Inverse masses of the contacts: a point of the garment that holds several particles sewn together moves as one,
+    // with the sum of their masses (fixed if one of them is).
     const float* w = cloth_.inv_mass.data();
+    if (!sc_group_.empty()) {
+        std::copy_n(w, n, sc_contact_w_.data());
+        for (std::size_t g = 0; g + 1 < sc_group_start_.size(); ++g) {
+            double mass = 0.0;
+            bool fixed = false;
+            for (std::uint32_t k = sc_group_start_[g]; k < sc_group_start_[g + 1]; ++k) {
+                const float wi = w[sc_group_[k]];
+                fixed = fixed || wi == 0.0f;
+                mass += fixed ? 0.0 : 1.0 / double(wi);
+            }
+            const float wg = fixed ? 0.0f : float(1.0 / mass);
+            for (std::uint32_t k = sc_group_start_[g]; k < sc_group_start_[g + 1]; ++k) sc_contact_w_[sc_group_[k]] = wg;
+        }
+        w = sc_contact_w_.data();
+    }
     float *x = out.x.data(), *y = out.y.data(), *z = out.z.data();
     const SelfCollisionPatches& pa = sc_patches_;
     const std::size_t patches = pa.count();
@@ -816,6 +853,24 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
     deep = deep_any.load();
     if (found == 0) return 0;
     if (probe) return 1; // nothing was deposited
+    // A point holding several particles: every one of them takes what the point's contacts asked (integer sums: the
+    // same in any order).
+    if (!sc_group_.empty()) for_blocks<Parallel>(sc_group_start_.size() - 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t g = begin; g < end; ++g) {
+            std::int64_t sum[6] = {0, 0, 0, 0, 0, 0};
+            std::uint32_t count = 0;
+            for (std::uint32_t k = sc_group_start_[g]; k < sc_group_start_[g + 1]; ++k) {
+                const std::uint32_t i = sc_group_[k];
+                for (int f = 0; f < 6; ++f) sum[f] += acc[6 * std::size_t(i) + f];
+                count += hits[i];
+            }
+            for (std::uint32_t k = sc_group_start_[g]; k < sc_group_start_[g + 1]; ++k) {
+                const std::uint32_t i = sc_group_[k];
+                for (int f = 0; f < 6; ++f) acc[6 * std::size_t(i) + f] = sum[f];
+                hits[i] = count;
+            }
+        }
+    });
     // Per particle: the mean of what its contacts asked; the accumulators are cleared for the next round.
     for_blocks<Parallel>(n, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) {

@@ -474,6 +474,11 @@ class Simulation {
     std::vector<std::uint32_t> sc_edge_twin_;
     std::vector<std::uint32_t> sc_sewn_; ///< per particle: the lowest particle sewn to it through seams (itself if none)
     std::vector<std::uint32_t> sc_ring_start_, sc_ring_; ///< per particle: sc_sewn_ of its triangles' particles (CSR)
+    /// The points of the garment that hold more than one particle (sewn together): their particles, ascending (CSR).
+    std::vector<std::uint32_t> sc_group_start_, sc_group_;
+    /// Per particle, for the contacts of a round: its inverse mass, or for a particle of such a point the inverse of
+    /// the point's mass (0 when a particle of it is fixed). Filled per run; unused without sewn points.
+    std::vector<float> sc_contact_w_;
     SelfCollisionPatches sc_patches_;
     std::uint32_t sc_patch_target_ = 0; ///< triangles per patch the patches were cooked for (0: none yet)
     float sc_mean_edge_ = 0.0f;         ///< m: mean rest length of the structural springs (sizes the patches)
