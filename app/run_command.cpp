@@ -275,8 +275,10 @@ int run_command(const RunOptions& o) {
                                                    : "outline";
     if (spec.cloth == ClothType::grid)
         j["n"] = spec.grid.n;
-    else if (spec.cloth == ClothType::tshirt)
+    else if (spec.cloth == ClothType::tshirt) {
         j["cells_per_metre"] = spec.tshirt.cells_per_metre;
+        j["mirror_exact"] = !sim.cloth().mirror.empty();
+    }
     else if (spec.cloth == ClothType::outline)
         j["spacing"] = spec.outline.spacing;
     else if (spec.cloth == ClothType::mask)

@@ -241,6 +241,16 @@ PY
 else
     echo "FAIL: an implicit run"; cat "$err" "$out"; fail=1
 fi
+# The built-in T-shirt is mirror-exact; a scene that switches it off says so.
+plain=$(mktemp --suffix=.json)
+printf '{"cloth": {"type": "tshirt", "mirror_exact": false}}' > "$plain"
+if "$DRAPE" run --scene tshirt --steps 1 --json 2>/dev/null | python3 -c "import json,sys; j=json.load(sys.stdin); assert j['mirror_exact'] is True, j.get('mirror_exact')" &&
+   "$DRAPE" run --scene "$plain" --steps 1 --json 2>/dev/null | python3 -c "import json,sys; j=json.load(sys.stdin); assert j['mirror_exact'] is False, j.get('mirror_exact')"; then
+    echo "ok: the T-shirt reports mirror_exact (true by default, false when its scene switches it off)"
+else
+    echo "FAIL: the T-shirt's mirror_exact in the JSON"; fail=1
+fi
+rm -f "$plain"
 # A cloth without coarse levels says so beside the setting (an adversarial sweep read "multilevel": true, "levels": 1).
 if "$DRAPE" run --scene tshirt --solver implicit --steps 1 --json 2>/dev/null | python3 -c "import json,sys; im=json.load(sys.stdin)['implicit']; assert im['multilevel'] is True and im['levels_available'] == 1 and im['levels'] == 1, im"; then
     echo "ok: the T-shirt's implicit JSON reports the multilevel setting with no coarse levels available"
