@@ -1,6 +1,7 @@
 // Simulation set-up, parameters and state queries. The per-substep pipeline is in substep.cpp.
 #include "drape/simulation.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -8,6 +9,7 @@
 
 #include "drape/stability.hpp"
 #include "implicit_solver.hpp"
+#include "vbd.hpp"
 
 namespace drape {
 
@@ -353,9 +355,32 @@ void Simulation::apply_user_constraints() noexcept {
     if (grabbed_ == SIZE_MAX) return;
     StateBuffer& s = cur();
     const std::size_t i = grabbed_;
-    s.x[i] = grab_target_[0];
-    s.y[i] = grab_target_[1];
-    s.z[i] = grab_target_[2];
+    float p[3] = {grab_target_[0], grab_target_[1], grab_target_[2]};
+    if (!params_.colliders.empty()) {
+        // The hand does not drag the cloth into or through a collider (the body under a garment): the path from where
+        // the grabbed particle is to the target is walked in steps of at most 2 mm (256 at most); at the first point
+        // inside a collider the particle stops where that path enters it and slides on the tangent plane there
+        // (vbd::contact_project, as the implicit sweeps keep points out), so a target inside or beyond the body
+        // leaves the particle on the near side of it.
+        const float p0[3] = {s.x[i], s.y[i], s.z[i]};
+        const float dx = p[0] - p0[0], dy = p[1] - p0[1], dz = p[2] - p0[2];
+        const float length = std::sqrt(dx * dx + dy * dy + dz * dz);
+        const int samples = std::clamp(static_cast<int>(std::ceil(length / 0.002f)), 1, 256);
+        for (int k = 1; k <= samples; ++k) {
+            const float t = float(k) / float(samples);
+            float q[3] = {p0[0] + t * dx, p0[1] + t * dy, p0[2] + t * dz};
+            bool inside = false;
+            for (const Collider& c : params_.colliders) inside = inside || is_inside(c, {q[0], q[1], q[2]});
+            if (!inside) continue;
+            float normal[3];
+            vbd::contact_project(params_.colliders, p0, q, normal);
+            p[0] = q[0], p[1] = q[1], p[2] = q[2];
+            break;
+        }
+    }
+    s.x[i] = p[0];
+    s.y[i] = p[1];
+    s.z[i] = p[2];
     store_velocity(s, i, {}, params_.integrator, params_.dt);
 }
 
