@@ -3,7 +3,7 @@
 // particles inside the body and whether the state is finite, twelve times over the run.
 //   drape_shirt [field=value ...]: cells_per_metre= (resolution, 10..1000), strain_limit= (ratio, 0 = off),
 //   seam_rest= (seam rest length over the spacing), sewing_speed= (m/s), seconds= (run length, default 3),
-//   solver=implicit, mirror_exact=1 (TShirtParams::mirror_exact), self_collision= (thickness in m, 0 = off), early=1 (also after the first 1, 2, 3, 10, 20, 50, 100, 200 and 500 substeps)
+//   solver=implicit, mirror_exact=0 (TShirtParams::mirror_exact, on by default), self_collision= (thickness in m, 0 = off), early=1 (also after the first 1, 2, 3, 10, 20, 50, 100, 200 and 500 substeps)
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
