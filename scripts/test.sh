@@ -68,6 +68,7 @@ if [ "$asan" = 1 ]; then
     release_only+='|Implicit\.FasComesToRestOnTheExplicitEquilibrium|Implicit\.StrainLimitHoldsOnFrameLongSteps'
     release_only+='|Implicit\.OutlineClothComesToRestOnItsCoarseLevels|Scenes/BuiltInScene\.StaysHealthyForFiveSeconds/drape'
     release_only+='|TShirtSewn\.HemDraggedThirtyCentimetresAndReleasedStaysOn|TShirtSewn\.ClosesEverySeamSymmetricallyOutsideTheBody'
+    release_only+='|TShirtSewn\.HemPushedIntoTheBodyStopsAtItsSurface' # 3 s in Release; the grab's walk runs under ASan in Physics.GrabbedParticleStaysOutOfColliders
     release_only+='|Implicit\.StrainLimitBoundsCompressionNextToTheClips|Implicit\.SettlesOnTheExplicitStaticEquilibrium'
     release_only+='|Implicit\.FasAtRestUnderLightAirDragReachesTheSameRest)( .*)?$'
     exclude=()
