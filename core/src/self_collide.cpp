@@ -120,7 +120,6 @@ void Simulation::cook_self_collision() {
             std::vector<std::uint32_t> size(n, 0);
             for (std::size_t i = 0; i < n; ++i) ++size[sc_sewn_[i]];
             std::vector<std::uint32_t> slot(n, UINT32_MAX);
-            std::vector<std::uint32_t> order;
             for (std::uint32_t r = 0; r < n; ++r)
                 if (size[r] > 1) {
                     slot[r] = std::uint32_t(sc_group_start_.size() - 1);
@@ -322,6 +321,24 @@ template <bool Parallel> void Simulation::self_collide_stage(StateBuffer& out, b
     const bool explicit_solver = params_.solver != Solver::implicit;
     const bool track = explicit_solver || !again;
     sc_track_pushes_ = track;
+    // Inverse masses of the contacts, once a run (pins and the grab change them between steps): a point of the
+    // garment that holds several particles sewn together moves as one, with the sum of their masses (fixed if one of
+    // them is).
+    if (!sc_group_.empty()) {
+        const float* w = cloth_.inv_mass.data();
+        std::copy_n(w, n, sc_contact_w_.data());
+        for (std::size_t g = 0; g + 1 < sc_group_start_.size(); ++g) {
+            double mass = 0.0;
+            bool fixed = false;
+            for (std::uint32_t k = sc_group_start_[g]; k < sc_group_start_[g + 1]; ++k) {
+                const float wi = w[sc_group_[k]];
+                fixed = fixed || wi == 0.0f;
+                if (!fixed) mass += 1.0 / double(wi);
+            }
+            const float wg = fixed ? 0.0f : float(1.0 / mass);
+            for (std::uint32_t k = sc_group_start_[g]; k < sc_group_start_[g + 1]; ++k) sc_contact_w_[sc_group_[k]] = wg;
+        }
+    }
     if (track) for_blocks<Parallel>(n, [&](std::size_t begin, std::size_t end) {
         std::fill(sc_push_x_.data() + begin, sc_push_x_.data() + end, 0.0f);
         std::fill(sc_push_y_.data() + begin, sc_push_y_.data() + end, 0.0f);
@@ -439,24 +456,8 @@ std::size_t Simulation::self_collide_round(StateBuffer& out, const float* x0, co
     const std::uint32_t* edge = sc_edges_.data();
     const std::uint32_t* edge_twin = sc_edge_twin_.empty() ? nullptr : sc_edge_twin_.data();
     const std::uint32_t* twin = cloth_.mirror.empty() ? nullptr : cloth_.mirror.data();
-    // Inverse masses of the contacts: a point of the garment that holds several particles sewn together moves as one,
-    // with the sum of their masses (fixed if one of them is).
-    const float* w = cloth_.inv_mass.data();
-    if (!sc_group_.empty()) {
-        std::copy_n(w, n, sc_contact_w_.data());
-        for (std::size_t g = 0; g + 1 < sc_group_start_.size(); ++g) {
-            double mass = 0.0;
-            bool fixed = false;
-            for (std::uint32_t k = sc_group_start_[g]; k < sc_group_start_[g + 1]; ++k) {
-                const float wi = w[sc_group_[k]];
-                fixed = fixed || wi == 0.0f;
-                mass += fixed ? 0.0 : 1.0 / double(wi);
-            }
-            const float wg = fixed ? 0.0f : float(1.0 / mass);
-            for (std::uint32_t k = sc_group_start_[g]; k < sc_group_start_[g + 1]; ++k) sc_contact_w_[sc_group_[k]] = wg;
-        }
-        w = sc_contact_w_.data();
-    }
+    // Inverse masses of the contacts (sc_contact_w_ where particles are sewn together, filled by the run).
+    const float* w = sc_group_.empty() ? cloth_.inv_mass.data() : sc_contact_w_.data();
     float *x = out.x.data(), *y = out.y.data(), *z = out.z.data();
     const SelfCollisionPatches& pa = sc_patches_;
     const std::size_t patches = pa.count();
