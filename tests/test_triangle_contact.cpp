@@ -158,11 +158,17 @@ TEST_P(TriangleContactDrop, NoTriangleEndsInsideAnyColliderKind) {
         }
         EXPECT_EQ(worst, 0u) << "triangles meeting the solid at some check";
         // The cloth came to the collider and rests on it: it did not fall through (its highest point is above the
-        // collider's lowest; all kinds here are centred at y = 0 and reach below it).
+        // collider's lowest; all kinds here are centred at y = 0 and reach below it), and it fell (its mean height
+        // is below the drop height: a corner of the 2 x 2 cloth tipping over the capsule can stand higher).
         float top = -1e9f;
-        for (float v : sim.y()) top = std::max(top, origin_y + v);
+        double mean = 0.0;
+        for (float v : sim.y()) {
+            top = std::max(top, origin_y + v);
+            mean += origin_y + v;
+        }
+        mean /= double(sim.y().size());
         EXPECT_GT(top, 0.0f) << "the cloth fell through";
-        EXPECT_LT(top, 0.45f) << "the cloth never fell";
+        EXPECT_LT(mean, 0.4) << "the cloth never fell";
     }
 }
 

@@ -683,10 +683,12 @@ template <bool Parallel> void Simulation::implicit_step() {
     st.coulomb_guess = !multilevel; // else the coarse levels' friction is in the guess
     st.contact_steps = multilevel && params_.self_collision.thickness == 0.0f;
     // Triangles near a solid collider at the step's start (x^n, clear of the colliders; the guess may be
-    // inside them): their contact enters the sweeps (implicit_triangle_contact.cpp), where the constrained
-    // steps are on.
+    // inside them): their contact enters the sweeps (implicit_triangle_contact.cpp), on every cloth: with the
+    // constrained steps off too (self-collision, single-level cloths) the terms are the triangles' only contact
+    // inside the step (without them the implicit T-shirt's hem pushed into the hips put 26 triangles in the body;
+    // docs/collisions.md, "Triangle contact inside the solve").
     vbd::TriangleTerms terms;
-    if (st.contact_steps && implicit_triangle_terms<Parallel>(a.x.data(), a.y.data(), a.z.data())) {
+    if (implicit_triangle_terms<Parallel>(a.x.data(), a.y.data(), a.z.data())) {
         terms = {cloth_.triangles.data(), vertex_tri_offsets_.data(),
                  vertex_tris_.data(),     tt_vertex_on_.data(),
                  tt_on_.data(),           tt_term_.data(),
