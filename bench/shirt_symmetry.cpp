@@ -3,7 +3,8 @@
 // particles inside the body and whether the state is finite, twelve times over the run.
 //   drape_shirt [field=value ...]: cells_per_metre= (resolution, 10..1000), strain_limit= (ratio, 0 = off),
 //   seam_rest= (seam rest length over the spacing), sewing_speed= (m/s), seconds= (run length, default 3),
-//   solver=implicit, mirror_exact=0 (TShirtParams::mirror_exact, on by default), self_collision= (thickness in m, 0 = off), early=1 (also after the first 1, 2, 3, 10, 20, 50, 100, 200 and 500 substeps)
+//   solver=implicit, mirror_exact=0 (TShirtParams::mirror_exact, on by default), self_collision= (thickness in m, 0 = off), early=1 (also after the first 1, 2, 3, 10, 20, 50, 100, 200 and 500 substeps),
+//   every_step=1 (after every substep instead, to find where symmetry is first lost)
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -30,7 +31,7 @@ void print(const char* when, const drape::Simulation& sim, const drape::GarmentF
 int main(int argc, char** argv) try {
     drape::SceneSpec spec = drape::load_scene("tshirt");
     double seconds = 3.0;
-    bool early = false;
+    bool early = false, every_step = false;
     for (int k = 1; k < argc; ++k) {
         const std::string a = argv[k];
         const auto eq = a.find('=');
@@ -56,6 +57,7 @@ int main(int argc, char** argv) try {
         else if (key == "seconds") seconds = number();
         else if (key == "solver" && value == "implicit") spec.physics.solver = drape::Solver::implicit;
         else if (key == "early") early = value != "0";
+        else if (key == "every_step") every_step = value != "0";
         else if (key == "mirror_exact") spec.tshirt.mirror_exact = value != "0";
         else if (key == "self_collision") spec.physics.self_collision.thickness = number();
         else throw std::runtime_error("unknown field " + a);
@@ -75,6 +77,15 @@ int main(int argc, char** argv) try {
             const std::string when = "substep " + std::to_string(sim.steps_done());
             print(when.c_str(), sim, drape::garment_figures(sim, mirror));
         }
+    if (every_step) { // after each substep (each implicit step) until `seconds`: where symmetry is first lost
+        const auto steps = static_cast<std::size_t>(seconds / sim.params().dt + 0.5);
+        for (std::size_t k = 0; k < steps; ++k) {
+            sim.step(1);
+            const std::string when = "substep " + std::to_string(sim.steps_done());
+            print(when.c_str(), sim, drape::garment_figures(sim, mirror));
+        }
+        return 0;
+    }
     const auto per = static_cast<std::size_t>(seconds / 12.0 / sim.params().dt + 0.5);
     for (int k = 1; k <= 12; ++k) {
         sim.step(per > 0 ? per : 1);

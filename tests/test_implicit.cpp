@@ -65,21 +65,33 @@ double max_distance(const Simulation& a, const Simulation& b) {
     return worst;
 }
 
+// No spring and no bending element joins two vertices of one colour, except a mirror-exact cloth's declared pairs
+// (VbdGraph::paired: a particle and its own twin, next to each other at an even place of their colour, so that one
+// SIMD slice holds both).
 void expect_valid_colouring(const Cloth& cloth, const VbdGraph& g) {
     const std::size_t n = cloth.particle_count;
-    std::vector<std::uint32_t> colour(n, UINT32_MAX);
+    std::vector<std::uint32_t> colour(n, UINT32_MAX), partner(n, UINT32_MAX);
     for (std::size_t c = 0; c < g.colour_count(); ++c)
         for (std::uint32_t k = g.colour_offsets[c]; k < g.colour_offsets[c + 1]; ++k) {
             ASSERT_EQ(colour[g.colour_vertex[k]], UINT32_MAX) << "vertex in two colours";
             colour[g.colour_vertex[k]] = static_cast<std::uint32_t>(c);
+            if (g.paired.empty() || !g.paired[k]) continue;
+            ASSERT_TRUE(g.mirror_exact) << "pairs only on a mirror-exact cloth";
+            ASSERT_LT(k + 1, g.colour_offsets[c + 1]) << "a pair split between colours";
+            ASSERT_EQ((k - g.colour_offsets[c]) % 2, 0u) << "a pair at an odd place could straddle a slice";
+            const std::uint32_t i = g.colour_vertex[k], t = g.colour_vertex[k + 1];
+            ASSERT_EQ(cloth.mirror.at(i), t) << "a pair that is not a particle and its twin";
+            partner[i] = t;
+            partner[t] = i;
         }
     for (std::uint32_t c : colour) ASSERT_NE(c, UINT32_MAX) << "vertex in no colour";
-    for (const Edge& e : cloth.edges) EXPECT_NE(colour[e.a], colour[e.b]) << "spring " << e.a << "-" << e.b;
+    auto apart = [&](std::uint32_t a, std::uint32_t b) { return colour[a] != colour[b] || partner[a] == b; };
+    for (const Edge& e : cloth.edges) EXPECT_TRUE(apart(e.a, e.b)) << "spring " << e.a << "-" << e.b;
     for (const BendElement& e : cloth.bending.elements)
         for (int p = 0; p < 4; ++p)
             for (int q = p + 1; q < 4; ++q)
                 if (e.c[p] != 0.0f && e.c[q] != 0.0f && e.v[p] != e.v[q]) {
-                    EXPECT_NE(colour[e.v[p]], colour[e.v[q]]) << "bending element " << e.v[p] << "-" << e.v[q];
+                    EXPECT_TRUE(apart(e.v[p], e.v[q])) << "bending element " << e.v[p] << "-" << e.v[q];
                 }
 }
 
@@ -103,9 +115,11 @@ TEST(Implicit, ColouringSeparatesEveryCoupledPair) {
 // A mirror-symmetric garment is coloured in mirror pairs: the T-shirt's twins (by position) are its mask's mirror
 // images, and a particle and its twin share a colour unless they are coupled (the pairs astride the centre line).
 // Measured (drape_shirt solver=implicit seconds=3, AVX2): mirror rms at 2.8 s 9.4 mm in index order, 5.7 mm paired.
+// On a mirror-exact cloth (the default T-shirt) the coupled ones share their colour too, as declared pairs.
 TEST(Implicit, MirrorTwinsAreColouredTogether) {
     SceneSpec shirt = load_scene("tshirt");
     shirt.physics.solver = Solver::implicit;
+    shirt.tshirt.mirror_exact = false; // twins found by position
     BuiltScene b = build_scene(shirt);
     const std::size_t n = b.cloth.particle_count;
     const std::vector<std::uint32_t> mirror = tshirt_mirror_map(shirt.tshirt);
@@ -134,10 +148,23 @@ TEST(Implicit, MirrorTwinsAreColouredTogether) {
         ++apart;
     }
     EXPECT_LT(apart, n / 10); // 84 of 1,008: the pairs astride the centre line
+    EXPECT_GT(apart, 0u);
     // A cloth that is not symmetric gets no twins (index order, as before).
     std::vector<float> x = b.initial.x;
     for (std::size_t i = 0; i < n; i += 10) x[i] += 0.01f;
     EXPECT_TRUE(vbd::mirror_twins(x, b.initial.y, b.initial.z).empty());
+    // Mirror-exact: every particle shares its twin's colour; the coupled ones are the declared pairs.
+    shirt.tshirt.mirror_exact = true;
+    BuiltScene e = build_scene(shirt);
+    Simulation se(e.cloth, e.initial, e.params);
+    const VbdGraph& ge = se.vbd_graph();
+    ASSERT_TRUE(ge.mirror_exact);
+    expect_valid_colouring(e.cloth, ge);
+    std::vector<std::uint32_t> ce(n);
+    for (std::size_t c = 0; c < ge.colour_count(); ++c)
+        for (std::uint32_t k = ge.colour_offsets[c]; k < ge.colour_offsets[c + 1]; ++k) ce[ge.colour_vertex[k]] = std::uint32_t(c);
+    for (std::uint32_t i = 0; i < n; ++i) EXPECT_EQ(ce[i], ce[e.cloth.mirror[i]]) << "particle " << i;
+    EXPECT_EQ(std::size_t(std::count(ge.paired.begin(), ge.paired.end(), std::uint8_t{1})), apart / 2);
 }
 
 namespace {
@@ -881,7 +908,8 @@ TEST(Implicit, SimdSweepsMatchTheScalarReferenceBitForBit) {
         // steps, and scalar without the triangle terms
         for (int mode = 0; mode < 5; ++mode) {
             vbd::Solver solver;
-            solver.cook(cloth);
+            solver.cook(cloth, cloth.mirror); // a mirror-exact cloth (the T-shirt): its exact sums and mirror pairs
+            EXPECT_EQ(solver.graph().mirror_exact, !cloth.mirror.empty());
             solver.set_simd(mode == 1 || mode == 2);
             solver.set_grid(mode == 2);
             EXPECT_EQ(solver.grid_sweeps(), mode == 2 && grid_layout);
@@ -988,7 +1016,17 @@ TEST(Implicit, SimdSweepsMatchTheScalarReferenceBitForBit) {
     SceneSpec shirt = load_scene("tshirt");
     shirt.tshirt.cells_per_metre = 30;
     BuiltScene b = build_scene(shirt);
+    ASSERT_FALSE(b.cloth.mirror.empty()) << "the T-shirt is mirror-exact by default";
+    {
+        // Its particles coupled to their own twins across the mirror plane (a bending stencil over a centre-line
+        // edge) share a colour in pairs, solved together: the scalar reference must take both steps from the
+        // same positions as the SIMD lanes do.
+        vbd::Solver probe;
+        probe.cook(b.cloth, b.cloth.mirror);
+        EXPECT_GT(std::count(probe.graph().paired.begin(), probe.graph().paired.end(), std::uint8_t{1}), 10);
+    }
     compare(b.cloth, b.initial, b.params.colliders, false);
+    compare(b.cloth, b.initial, {}, false, true);
 }
 
 // drape run and the viewer warn when the implicit solver runs a cloth on one grid only (no multilevel guess: such a

@@ -167,9 +167,11 @@ void Simulation::cook_implicit() {
     }
     for (std::uint32_t i = 0; i < cloth_.particle_count; ++i) root[i] = find(i);
     solver->piece_held.assign(cloth_.particle_count, 0);
+    // A mirror-exact cloth (Cloth::mirror) gives its own map, and its sweeps are mirror-exact too (VbdGraph::mirror_exact).
     const std::vector<std::uint32_t> fine_twins =
-        cloth_.grid ? std::vector<std::uint32_t>{}
-                    : vbd::mirror_twins({now.x.data(), n}, {now.y.data(), n}, {now.z.data(), n});
+        !cloth_.mirror.empty() ? cloth_.mirror
+        : cloth_.grid          ? std::vector<std::uint32_t>{}
+                               : vbd::mirror_twins({now.x.data(), n}, {now.y.data(), n}, {now.z.data(), n});
     solver->fine.cook(cloth_, fine_twins);
     if (!edge_rest_.empty()) solver->fine.set_spring_rest(edge_rest_); // seams being sewn (sewing.cpp)
     // Coarse levels: a cloth that can rebuild its fabric at a coarser spacing (Cloth::coarsen: grids, outlines).
@@ -689,7 +691,8 @@ template <bool Parallel> void Simulation::implicit_step() {
     // docs/collisions.md, "Triangle contact inside the solve").
     vbd::TriangleTerms terms;
     if (implicit_triangle_terms<Parallel>(a.x.data(), a.y.data(), a.z.data())) {
-        terms = {cloth_.triangles.data(), vertex_tri_offsets_.data(),
+        terms = {cloth_.mirror_corners.empty() ? cloth_.triangles.data() : cloth_.mirror_corners.data(),
+                 vertex_tri_offsets_.data(),
                  vertex_tris_.data(),     tt_vertex_on_.data(),
                  tt_on_.data(),           tt_term_.data(),
                  tt_colliders_,           tt_reach_};

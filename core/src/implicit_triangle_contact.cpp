@@ -62,7 +62,8 @@ bool Simulation::implicit_triangle_terms(const float* x, const float* y, const f
     for (const Collider& col : tt_colliders_)
         any_solid = any_solid || col.kind != ColliderKind::plane;
     if (!any_solid || core_measure_.size() != n * tt_colliders_.size()) return false;
-    const std::uint32_t* tri = cloth_.triangles.data();
+    // A mirror-exact cloth's triangles in mirror corner order (make_mirror_exact), as the collide stage's pass reads them.
+    const std::uint32_t* tri = cloth_.mirror_corners.empty() ? cloth_.triangles.data() : cloth_.mirror_corners.data();
     const float* w = cloth_.inv_mass.data();
     const VbdGraph& graph = implicit_->fine.graph();
     float* clear = clearance_.data();

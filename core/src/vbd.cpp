@@ -5,7 +5,9 @@
 #include <array>
 #include <cmath>
 #include <numeric>
+#include <tuple>
 
+#include "drape/mirror_symmetry.hpp"
 #include "for_each_index.hpp"
 #include "vbd_batch.hpp"
 #include "vbd_grid.hpp"
@@ -23,7 +25,8 @@ void refresh_materials(VbdGraph& g, const Cloth& cloth) {
 
 namespace {
 
-VbdGraph finish_colouring(VbdGraph& g, const std::vector<std::uint32_t>& colour, std::uint32_t colours);
+VbdGraph finish_colouring(VbdGraph& g, const std::vector<std::uint32_t>& colour, std::uint32_t colours,
+                          const std::vector<std::uint32_t>& pair_of = {});
 
 /// P = 2 or 3 when the cloth is a full grid and no spring or bending entry joins two vertices of one class
 /// (row mod P, column mod P); 0 otherwise.
@@ -129,6 +132,32 @@ VbdGraph cook(const Cloth& cloth, std::span<const std::uint32_t> twin) {
             g.spring_edge[e] = row[e - b].second;
         }
     }
+    // A mirror-exact cloth (Cloth::mirror, as its twin map): each row in mirror order, so that a particle and its twin
+    // take their terms in the same order and a particle on the mirror plane takes each next to its mirror image's.
+    g.mirror_exact = !cloth.mirror.empty() && twin.size() == n && std::equal(twin.begin(), twin.end(), cloth.mirror.begin());
+    auto mirror_rows = [&](const std::vector<std::uint32_t>& offsets, std::vector<std::uint32_t>& neighbour,
+                           auto&& permute_entries) {
+        std::vector<std::uint32_t> order_all(neighbour.size());
+        for (std::size_t i = 0; i < n; ++i) {
+            auto row = [&](std::size_t p) {
+                return std::span<const std::uint32_t>(neighbour.data() + offsets[p], offsets[p + 1] - offsets[p]);
+            };
+            const std::vector<std::uint32_t> order =
+                mirror_row_order(std::uint32_t(i), twin[i], row(i), row(twin[i]), twin);
+            for (std::size_t k = 0; k < order.size(); ++k) order_all[offsets[i] + k] = offsets[i] + order[k];
+        }
+        permute_entries(order_all);
+    };
+    if (g.mirror_exact)
+        mirror_rows(g.spring_offsets, g.spring_neighbour, [&](const std::vector<std::uint32_t>& from) {
+            std::vector<std::uint32_t> nb(from.size()), ed(from.size());
+            for (std::size_t e = 0; e < from.size(); ++e) {
+                nb[e] = g.spring_neighbour[from[e]];
+                ed[e] = g.spring_edge[from[e]];
+            }
+            g.spring_neighbour = std::move(nb);
+            g.spring_edge = std::move(ed);
+        });
     g.spring_k.resize(entries);
     g.spring_kd.resize(entries);
     g.spring_rest.resize(entries);
@@ -140,13 +169,35 @@ VbdGraph cook(const Cloth& cloth, std::span<const std::uint32_t> twin) {
     if (!bend.empty()) {
         g.bend_offsets = bend.offsets;
         g.bend_neighbour = bend.neighbour;
-        g.bend_q.resize(bend.value.size());
+        std::vector<double> value = bend.value;
+        if (g.mirror_exact) {
+            // mirror_row_order reads sorted rows: sort each (neighbour, value), then put it in mirror order.
+            for (std::size_t i = 0; i < n; ++i) {
+                std::vector<std::pair<std::uint32_t, double>> row;
+                for (std::uint32_t e = g.bend_offsets[i]; e < g.bend_offsets[i + 1]; ++e)
+                    row.emplace_back(g.bend_neighbour[e], value[e]);
+                std::sort(row.begin(), row.end());
+                for (std::uint32_t e = g.bend_offsets[i]; e < g.bend_offsets[i + 1]; ++e)
+                    std::tie(g.bend_neighbour[e], value[e]) = row[e - g.bend_offsets[i]];
+            }
+            mirror_rows(g.bend_offsets, g.bend_neighbour, [&](const std::vector<std::uint32_t>& from) {
+                std::vector<std::uint32_t> nb(from.size());
+                std::vector<double> v(from.size());
+                for (std::size_t e = 0; e < from.size(); ++e) {
+                    nb[e] = g.bend_neighbour[from[e]];
+                    v[e] = value[from[e]];
+                }
+                g.bend_neighbour = std::move(nb);
+                value = std::move(v);
+            });
+        }
+        g.bend_q.resize(value.size());
         g.bend_diag.assign(n, 0.0f);
         for (std::size_t i = 0; i < n; ++i) {
             double diag = 0.0;
-            for (std::uint32_t e = bend.offsets[i]; e < bend.offsets[i + 1]; ++e) {
-                g.bend_q[e] = static_cast<float>(bend.value[e]);
-                diag -= bend.value[e];
+            for (std::uint32_t e = g.bend_offsets[i]; e < g.bend_offsets[i + 1]; ++e) {
+                g.bend_q[e] = static_cast<float>(value[e]);
+                diag -= value[e];
             }
             g.bend_diag[i] = static_cast<float>(diag);
         }
@@ -185,6 +236,7 @@ VbdGraph cook(const Cloth& cloth, std::span<const std::uint32_t> twin) {
     // stays symmetric to rounding (in index order the T-shirt's halves were swept in unrelated orders and settled
     // ~1 cm apart). A twin coupled to its particle (across the mirror plane) takes its own colour after it.
     const bool paired = twin.size() == n;
+    std::vector<std::uint32_t> pair_of(g.mirror_exact ? n : 0, UINT32_MAX); // i < t coupled, same colour: t
     std::vector<std::uint32_t> stamp; // stamp[c] == tag: colour c is taken by a neighbour of the particle(s) tagged
     std::uint32_t colours = 0, tag = 0;
     auto mark_neighbours = [&](std::uint32_t i) {
@@ -219,24 +271,43 @@ VbdGraph cook(const Cloth& cloth, std::span<const std::uint32_t> twin) {
         mark_neighbours(t);
         const std::uint32_t c = smallest_free();
         give(i, c);
-        // The twin takes c too unless it is coupled to i (c is taken at it now): then the smallest colour free at it.
+        // The twin takes c too unless it is coupled to i (c is taken at it now): then the smallest colour free at it;
+        // on a mirror-exact cloth it takes c all the same, and the two are solved together (VbdGraph::paired).
         ++tag;
         mark_neighbours(t);
-        give(t, c < stamp.size() && stamp[c] == tag ? smallest_free() : c);
+        const bool coupled = c < stamp.size() && stamp[c] == tag;
+        if (coupled && g.mirror_exact) pair_of[i] = t;
+        give(t, coupled && !g.mirror_exact ? smallest_free() : c);
     }
-    return finish_colouring(g, colour, colours);
+    return finish_colouring(g, colour, colours, pair_of);
 }
 
 namespace {
 
-VbdGraph finish_colouring(VbdGraph& g, const std::vector<std::uint32_t>& colour, std::uint32_t colours) {
+VbdGraph finish_colouring(VbdGraph& g, const std::vector<std::uint32_t>& colour, std::uint32_t colours,
+                          const std::vector<std::uint32_t>& pair_of) {
     const std::size_t n = g.particle_count;
     g.colour_offsets.assign(colours + 1, 0);
     for (std::uint32_t c : colour) ++g.colour_offsets[c + 1];
     std::partial_sum(g.colour_offsets.begin(), g.colour_offsets.end(), g.colour_offsets.begin());
     g.colour_vertex.resize(n);
+    g.paired.assign(n, 0);
     std::vector<std::uint32_t> fill(g.colour_offsets.begin(), g.colour_offsets.end() - 1);
-    for (std::uint32_t i = 0; i < n; ++i) g.colour_vertex[fill[colour[i]]++] = i;
+    // Coupled mirror pairs open their colour (so a pair never straddles a SIMD slice: slices and chunks start at
+    // the colour's start and hold an even number of vertices), then the rest in index order.
+    const bool pairs = !pair_of.empty();
+    std::vector<std::uint8_t> placed(pairs ? n : 0, 0);
+    if (pairs)
+        for (std::uint32_t i = 0; i < n; ++i) {
+            const std::uint32_t t = pair_of[i];
+            if (t == UINT32_MAX) continue;
+            g.paired[fill[colour[i]]] = 1;
+            g.colour_vertex[fill[colour[i]]++] = i;
+            g.colour_vertex[fill[colour[i]]++] = t;
+            placed[i] = placed[t] = 1;
+        }
+    for (std::uint32_t i = 0; i < n; ++i)
+        if (!pairs || !placed[i]) g.colour_vertex[fill[colour[i]]++] = i;
     return std::move(g);
 }
 
@@ -290,12 +361,17 @@ bool solve_sym3(const float hess[6], const float r[3], float out[3]) noexcept {
 bool triangle_terms_step(const TriangleTerms& terms, std::uint32_t i, const float* x, const float* y,
                          const float* z, const std::uint32_t* slot, const float* x0, const float* y0,
                          const float* z0, float eps, const float x_now[3], float p[3],
-                         float hess[6]) noexcept {
+                         float hess[6], bool exact) noexcept {
     // The model's gradient at x_now: H (x_now - p).
     const float dx = x_now[0] - p[0], dy = x_now[1] - p[1], dz = x_now[2] - p[2];
     float g[3] = {hess[0] * dx + hess[3] * dy + hess[4] * dz, hess[3] * dx + hess[1] * dy + hess[5] * dz,
                   hess[4] * dx + hess[5] * dy + hess[2] * dz};
     float ht[6] = {hess[0], hess[1], hess[2], hess[3], hess[4], hess[5]};
+    // Exact (a mirror-exact cloth): friction summed apart from the normal terms, so that on the mirror plane each
+    // term is added next to its mirror image's (the triangles come in mirror order) and the pair cancels exactly.
+    float gf[3] = {0.0f, 0.0f, 0.0f}, hf6[6] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+    float* gfric = exact ? gf : g;
+    float* hfric = exact ? hf6 : ht;
     bool active = false;
     for (std::uint32_t k = terms.vertex_tri_offsets[i]; k < terms.vertex_tri_offsets[i + 1]; ++k) {
         const std::uint32_t t = terms.vertex_tris[k];
@@ -330,7 +406,8 @@ bool triangle_terms_step(const TriangleTerms& terms, std::uint32_t i, const floa
         if (!(a_free < 0.0f) || !(bi > 0.0f)) continue;
         active = true;
         const float gs = kc * a * bi, hs = kc * bi * bi;
-        add_isotropic_outer(0.0f, hs, nx, ny, nz, ht[0], ht[1], ht[2], ht[3], ht[4], ht[5]);
+        if (exact) add_isotropic_outer<true>(0.0f, hs, nx, ny, nz, ht[0], ht[1], ht[2], ht[3], ht[4], ht[5]);
+        else add_isotropic_outer(0.0f, hs, nx, ny, nz, ht[0], ht[1], ht[2], ht[3], ht[4], ht[5]);
         g[0] += gs * nx;
         g[1] += gs * ny;
         g[2] += gs * nz;
@@ -343,13 +420,19 @@ bool triangle_terms_step(const TriangleTerms& terms, std::uint32_t i, const floa
         const float ut[3] = {u[0] - un * nx, u[1] - un * ny, u[2] - un * nz};
         const float len = std::sqrt(ut[0] * ut[0] + ut[1] * ut[1] + ut[2] * ut[2]);
         const float f = mu * lambda / std::max(len, eps);
-        g[0] += bi * f * ut[0];
-        g[1] += bi * f * ut[1];
-        g[2] += bi * f * ut[2];
+        gfric[0] += bi * f * ut[0];
+        gfric[1] += bi * f * ut[1];
+        gfric[2] += bi * f * ut[2];
         const float hf = bi * bi * f;
-        add_isotropic_outer(hf, -hf, nx, ny, nz, ht[0], ht[1], ht[2], ht[3], ht[4], ht[5]);
+        float* H = hfric;
+        if (exact) add_isotropic_outer<true>(hf, -hf, nx, ny, nz, H[0], H[1], H[2], H[3], H[4], H[5]);
+        else add_isotropic_outer(hf, -hf, nx, ny, nz, H[0], H[1], H[2], H[3], H[4], H[5]);
     }
     if (!active) return false;
+    if (exact) {
+        for (int c = 0; c < 3; ++c) g[c] += gf[c];
+        for (int c = 0; c < 6; ++c) ht[c] += hf6[c];
+    }
     float step[3];
     if (!solve_sym3(ht, g, step)) return false;
     for (int c = 0; c < 3; ++c) {
@@ -642,7 +725,7 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
             const float x_now[3] = {x[slot], y[slot], z[slot]};
             std::copy_n(hess, 6, terms_hess);
             if (triangle_terms_step(*st.triangle_terms, static_cast<std::uint32_t>(i), x, y, z, cell_of,
-                                    st.x0, st.y0, st.z0, args.fr_eps, x_now, p, terms_hess))
+                                    st.x0, st.y0, st.z0, args.fr_eps, x_now, p, terms_hess, graph_.mirror_exact))
                 hess = terms_hess;
         }
         if (planes) { // self-contact: not closer to the partner than the plane the contact left the vertex on
@@ -706,7 +789,10 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
                         const std::size_t s1 = s0 + (hi - lo + W - 1) / W;
                         alignas(64) float ox[W], oy[W], oz[W], g2[W], hs[6 * W];
                         for (std::size_t slice = s0; slice < s1; ++slice) {
-                            solve_batch(args, sl, slice, ox, oy, oz, g2, contact ? hs : nullptr);
+                            if (graph_.mirror_exact)
+                                solve_batch<true>(args, sl, slice, ox, oy, oz, g2, contact ? hs : nullptr);
+                            else
+                                solve_batch<false>(args, sl, slice, ox, oy, oz, g2, contact ? hs : nullptr);
                             for (std::uint32_t lane = 0; lane < sl.lanes[slice]; ++lane) {
                                 const std::uint32_t i = sl.vertex[slice * W + lane];
                                 if (inv_mass[i] == 0.0f) continue;
@@ -723,15 +809,30 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
                         chunk_residual_[base + ch] = r;
                         return;
                     }
+                    // The scalar reference: vertex by vertex, except a coupled mirror pair (VbdGraph::paired), whose
+                    // two steps are both taken from the same positions before either is written, as the SIMD
+                    // slice's lanes are.
+                    const bool exact = graph_.mirror_exact;
                     for (std::uint32_t k = lo; k < hi; ++k) {
-                        const std::uint32_t i = graph_.colour_vertex[k];
-                        if (inv_mass[i] == 0.0f) continue;
-                        float out[3], hess[6];
-                        r += solve_vertex(args, i, out, hess);
-                        if (contact) keep_out(i, i, out, hess);
-                        x[i] = out[0];
-                        y[i] = out[1];
-                        z[i] = out[2];
+                        const std::uint32_t count = exact && graph_.paired[k] ? 2u : 1u;
+                        float out[2][3], hess[2][6];
+                        double g2[2] = {0.0, 0.0};
+                        for (std::uint32_t m = 0; m < count; ++m) {
+                            const std::uint32_t i = graph_.colour_vertex[k + m];
+                            if (inv_mass[i] == 0.0f) continue;
+                            g2[m] = exact ? solve_vertex<false, true>(args, i, out[m], hess[m])
+                                          : solve_vertex(args, i, out[m], hess[m]);
+                        }
+                        for (std::uint32_t m = 0; m < count; ++m) {
+                            const std::uint32_t i = graph_.colour_vertex[k + m];
+                            if (inv_mass[i] == 0.0f) continue;
+                            r += g2[m];
+                            if (contact) keep_out(i, i, out[m], hess[m]);
+                            x[i] = out[m][0];
+                            y[i] = out[m][1];
+                            z[i] = out[m][2];
+                        }
+                        k += count - 1;
                     }
                     chunk_residual_[base + ch] = r;
                 });
@@ -744,7 +845,8 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
                 for (std::size_t i = ch * vbd_chunk, hi = std::min(n, (ch + 1) * vbd_chunk); i < hi; ++i) {
                     float out[3] = {x[i], y[i], z[i]}, hess[6];
                     if (inv_mass[i] != 0.0f) {
-                        r += solve_vertex(args, static_cast<std::uint32_t>(i), out, hess);
+                        r += graph_.mirror_exact ? solve_vertex<false, true>(args, static_cast<std::uint32_t>(i), out, hess)
+                                                 : solve_vertex(args, static_cast<std::uint32_t>(i), out, hess);
                         if (contact) keep_out(i, i, out, hess);
                     }
                     jac_x_[i] = out[0];
@@ -805,7 +907,10 @@ void Solver::gradient(const Point& st, float h, float air_drag, float* gx, float
             for (std::size_t slice = blk * slices_per_block, end = std::min(slices, (blk + 1) * slices_per_block);
                  slice < end; ++slice) {
                 simd::fbatch bx, by, bz, b2;
-                solve_lanes<true>(SliceSource(sl, graph_, slice), args, bx, by, bz, b2);
+                if (graph_.mirror_exact)
+                    solve_lanes<true, true>(SliceSource(sl, graph_, slice), args, bx, by, bz, b2);
+                else
+                    solve_lanes<true, false>(SliceSource(sl, graph_, slice), args, bx, by, bz, b2);
                 simd::store(ox, bx);
                 simd::store(oy, by);
                 simd::store(oz, bz);
@@ -823,7 +928,12 @@ void Solver::gradient(const Point& st, float h, float air_drag, float* gx, float
     for_each_index<Parallel>((n + block_particles - 1) / block_particles, [&](std::size_t blk) {
         for (std::size_t i = blk * block_particles, end = std::min(n, (blk + 1) * block_particles); i < end; ++i) {
             float g[3] = {0.0f, 0.0f, 0.0f};
-            if (st.inv_mass[i] != 0.0f) solve_vertex<true>(args, static_cast<std::uint32_t>(i), g);
+            if (st.inv_mass[i] != 0.0f) {
+                if (graph_.mirror_exact)
+                    solve_vertex<true, true>(args, static_cast<std::uint32_t>(i), g);
+                else
+                    solve_vertex<true>(args, static_cast<std::uint32_t>(i), g);
+            }
             gx[i] = g[0];
             gy[i] = g[1];
             gz[i] = g[2];

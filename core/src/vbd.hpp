@@ -23,7 +23,9 @@ namespace drape::vbd {
 
 /// Cooks the springs, the bending rows and the vertex colouring of a cloth. `twin` (empty, or one entry per particle:
 /// its mirror image's index, itself on the mirror plane, UINT32_MAX for none) makes the greedy colouring of a mesh
-/// give a particle and its twin the same colour where they are not coupled (mirror_twins below).
+/// give a particle and its twin the same colour where they are not coupled (mirror_twins below). When `twin` is the
+/// cloth's own Cloth::mirror (a mirror-exact cloth) the graph is mirror-exact (VbdGraph::mirror_exact: rows in mirror
+/// order, exact sums, coupled twins in one colour as declared pairs).
 VbdGraph cook(const Cloth& cloth, std::span<const std::uint32_t> twin = {});
 /// Each particle's mirror image across the plane x = (min x + max x) / 2 of the positions, where the positions are
 /// mirror symmetric: for each particle the particle at its mirrored position (within 1e-5 m; itself on the plane).
@@ -65,11 +67,12 @@ bool solve_sym3(const float hess[6], const float r[3], float out[3]) noexcept;
 /// / max(|u_T|, eps), Hessian b_i^2 mu lambda / max(|u_T|, eps) (I - n n^T) (the vertices' own smoothed
 /// Coulomb model, eps a slip distance); p becomes that model's minimum. The triangle's other vertices are
 /// read from x, y, z at slot[j] (slot null: at j); x0, y0, z0 are indexed by particle. Returns false (p and
-/// hess unchanged) when no term is active; else writes p and adds the terms' Hessians to hess.
+/// hess unchanged) when no term is active; else writes p and adds the terms' Hessians to hess. `exact`: a
+/// mirror-exact cloth's sums (accumulate<true>; VbdGraph::mirror_exact).
 bool triangle_terms_step(const TriangleTerms& terms, std::uint32_t i, const float* x, const float* y,
                          const float* z, const std::uint32_t* slot, const float* x0, const float* y0,
                          const float* z0, float eps, const float x_now[3], float p[3],
-                         float hess[6]) noexcept;
+                         float hess[6], bool exact = false) noexcept;
 
 /// The arrays one level's sweeps work on (particle_count entries each).
 struct LevelState {
@@ -243,33 +246,49 @@ template <class T> inline T friction_weight(T k, T s, T eps) noexcept {
 /// (scenes/examples/far_from_origin.json) dropped every step at h = 1/30 s and never moved.
 inline constexpr int vbd_line_search_halvings = 20;
 
+/// acc + a * b: fused (one rounding), or Exact: the product rounded, then the sum (a mirror-exact cloth,
+/// VbdGraph::mirror_exact). A particle on the mirror plane adds each term next to its mirror image's, whose x part is
+/// the negation: with the product rounded apart the pair cancels exactly, fused it leaves the product's rounding error
+/// (the explicit kernels' accumulate_term, spring_forces.hpp, for the same reason). T = float or simd::fbatch.
+template <bool Exact, class T> inline T accumulate(T a, T b, T acc) noexcept {
+    if constexpr (Exact) return acc + a * b;
+    else return simd::fma(a, b, acc);
+}
+/// acc - a * b, as accumulate.
+template <bool Exact, class T> inline T accumulate_neg(T a, T b, T acc) noexcept {
+    if constexpr (Exact) return acc - a * b;
+    else if constexpr (std::is_same_v<T, float>) return std::fma(-a, b, acc);
+    else return simd::fnma(a, b, acc);
+}
+
 /// Spring damping's Hessian blocks q n n^T summed from zero, for one vertex (T = float: solve_vertex) or one per lane
 /// (T = simd::fbatch: vbd_batch.hpp's solve_lanes, and a grid cloth's per-step cook, GridLayout::cook_damping): one
 /// definition, so the scalar reference and the SIMD sweeps do the same operations in the same order.
 template <class T> struct DampingHessian {
     T xx = T(0.0f), yy = xx, zz = xx, xy = xx, xz = xx, yz = xx;
-    void add(T q, T nx, T ny, T nz) noexcept {
+    template <bool Exact = false> void add(T q, T nx, T ny, T nz) noexcept {
         const T qx = q * nx, qy = q * ny;
         xx = simd::fma(qx, nx, xx);
         yy = simd::fma(qy, ny, yy);
         zz = simd::fma(q * nz, nz, zz);
-        xy = simd::fma(qx, ny, xy);
-        xz = simd::fma(qx, nz, xz);
+        xy = accumulate<Exact>(qx, ny, xy);
+        xz = accumulate<Exact>(qx, nz, xz);
         yz = simd::fma(qy, nz, yz);
     }
 };
 
 /// Adds a I + b u u^T to a symmetric 3x3 block (xx yy zz xy xz yz): a spring's projected Hessian (a = c, b = k - c)
 /// and friction's w (I - n n^T) (a = w, b = -w). T = float (solve_vertex) or simd::fbatch (solve_lanes): one
-/// definition, so the scalar reference and the SIMD sweeps do the same operations in the same order.
-template <class T>
+/// definition, so the scalar reference and the SIMD sweeps do the same operations in the same order. Exact:
+/// the entries a mirror negates (xy, xz) summed as accumulate<true>.
+template <bool Exact = false, class T>
 inline void add_isotropic_outer(T a, T b, T ux, T uy, T uz, T& xx, T& yy, T& zz, T& xy, T& xz, T& yz) noexcept {
     const T tx = b * ux, ty = b * uy;
     xx = xx + simd::fma(tx, ux, a);
     yy = yy + simd::fma(ty, uy, a);
     zz = zz + simd::fma(b * uz, uz, a);
-    xy = simd::fma(tx, uy, xy);
-    xz = simd::fma(tx, uz, xz);
+    xy = accumulate<Exact>(tx, uy, xy);
+    xz = accumulate<Exact>(tx, uz, xz);
     yz = simd::fma(ty, uz, yz);
 }
 
@@ -287,7 +306,7 @@ template <class T> inline void write_hessian(T* out, T xx, T yy, T zz, T xy, T x
 /// The local Newton step of vertex i (movable): writes the new position and returns |g_i|^2 (N^2). GradientOnly:
 /// writes g_i (the gradient of G at the iterate, N) instead and takes no step. `hess` (optional): the local Hessian
 /// H_i the step solved with (xx yy zz xy xz yz), for a step constrained to a contact afterwards (Solver::run).
-template <bool GradientOnly = false>
+template <bool GradientOnly = false, bool Exact = false>
 inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3], float* hess = nullptr) noexcept {
     const VbdGraph& g = *a.graph;
     const float xi = a.x[i], yi = a.y[i], zi = a.z[i];
@@ -321,23 +340,23 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3], flo
         const float l0 = len2 * inv_len;
         const float ux = dx * inv_len, uy = dy * inv_len, uz = dz * inv_len;
         const float s = stretched ? k * (l0 - l) : 0.0f;
-        sgx = std::fma(-s, ux, sgx);
-        sgy = std::fma(-s, uy, sgy);
-        sgz = std::fma(-s, uz, sgz);
+        sgx = accumulate_neg<Exact>(s, ux, sgx);
+        sgy = accumulate_neg<Exact>(s, uy, sgy);
+        sgz = accumulate_neg<Exact>(s, uz, sgz);
         const float c = k * std::max(0.0f, std::fma(-l, inv_len, 1.0f));
         // A zero-length spring at its rest: E = k/2 |d|^2, Hessian k I.
         const float cm = stretched ? c : (l == 0.0f ? k : 0.0f), cu = stretched ? k - c : 0.0f;
-        add_isotropic_outer(cm, cu, ux, uy, uz, hxx, hyy, hzz, hxy, hxz, hyz);
+        add_isotropic_outer<Exact>(cm, cu, ux, uy, uz, hxx, hyy, hzz, hxy, hxz, hyz);
         const float kd = g.spring_kd[e] * a.inv_h;
         const float nx = a.x0[j] - a.x0[i], ny = a.y0[j] - a.y0[i], nz = a.z0[j] - a.z0[i];
         const float n2 = std::fma(nz, nz, std::fma(ny, ny, nx * nx));
         const bool damped = kd > 0.0f && n2 > 1e-24f;
         const float q = damped ? kd / n2 : 0.0f; // kd / |n|^2
-        dh.add(q, nx, ny, nz);
+        dh.template add<Exact>(q, nx, ny, nz);
         const float p = q * std::fma(dz - nz, nz, std::fma(dy - ny, ny, (dx - nx) * nx));
-        gx = std::fma(-p, nx, gx);
-        gy = std::fma(-p, ny, gy);
-        gz = std::fma(-p, nz, gz);
+        gx = accumulate_neg<Exact>(p, nx, gx);
+        gy = accumulate_neg<Exact>(p, ny, gy);
+        gz = accumulate_neg<Exact>(p, nz, gz);
     }
     float qhxx = base + dh.xx, qhyy = base + dh.yy, qhzz = base + dh.zz, qhxy = dh.xy, qhxz = dh.xz, qhyz = dh.yz;
     // Bending: grad_i = sum_j Q_ij [(x_j - x_i) + beta/h ((x_j - x_j^n) - (x_i - x_i^n))] (rows of Q sum to 0),
@@ -348,9 +367,9 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3], flo
         for (std::uint32_t e = g.bend_offsets[i], end = g.bend_offsets[i + 1]; e < end; ++e) {
             const std::uint32_t j = g.bend_neighbour[e];
             const float q = g.bend_q[e];
-            bx = std::fma(q, std::fma(bh, (a.x[j] - a.x0[j]) - dxi, a.x[j] - xi), bx);
-            by = std::fma(q, std::fma(bh, (a.y[j] - a.y0[j]) - dyi, a.y[j] - yi), by);
-            bz = std::fma(q, std::fma(bh, (a.z[j] - a.z0[j]) - dzi, a.z[j] - zi), bz);
+            bx = accumulate<Exact>(q, std::fma(bh, (a.x[j] - a.x0[j]) - dxi, a.x[j] - xi), bx);
+            by = accumulate<Exact>(q, std::fma(bh, (a.y[j] - a.y0[j]) - dyi, a.y[j] - yi), by);
+            bz = accumulate<Exact>(q, std::fma(bh, (a.z[j] - a.z0[j]) - dzi, a.z[j] - zi), bz);
         }
         gx += bx;
         gy += by;
@@ -367,10 +386,10 @@ inline float solve_vertex(const SweepArgs& a, std::uint32_t i, float out[3], flo
         const float ux = std::fma(-dn, nx, dxi), uy = std::fma(-dn, ny, dyi), uz = std::fma(-dn, nz, dzi);
         const float s = std::sqrt(std::fma(uz, uz, std::fma(uy, uy, ux * ux)));
         const float w = friction_weight(a.fr_k[i], s, a.fr_eps);
-        gx = std::fma(w, ux, gx);
-        gy = std::fma(w, uy, gy);
-        gz = std::fma(w, uz, gz);
-        add_isotropic_outer(w, -w, nx, ny, nz, qhxx, qhyy, qhzz, qhxy, qhxz, qhyz);
+        gx = accumulate<Exact>(w, ux, gx);
+        gy = accumulate<Exact>(w, uy, gy);
+        gz = accumulate<Exact>(w, uz, gz);
+        add_isotropic_outer<Exact>(w, -w, nx, ny, nz, qhxx, qhyy, qhzz, qhxy, qhxz, qhyz);
     }
     // Total: quadratic terms plus the springs' stretch (hxx.. so far hold inertia + the springs' projected Hessian).
     hxx += qhxx - base;

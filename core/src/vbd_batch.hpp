@@ -43,7 +43,7 @@ inline simd::fbatch damping_q(simd::fbatch kd, simd::fbatch inv_h, simd::fbatch 
 /// Sources: SliceSource below (a colour's slice, neighbours gathered) and GridSource (vbd_grid.hpp: a grid cloth in
 /// colour sub-grids, neighbours loaded contiguously). The operations and their order are those of the scalar
 /// solve_vertex (vbd.hpp), so every source gives its bits.
-template <bool GradientOnly = false, class Src>
+template <bool GradientOnly = false, bool Exact = false, class Src>
 inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x, simd::fbatch& out_y,
                         simd::fbatch& out_z, simd::fbatch& out_g2, simd::fbatch* hess = nullptr) noexcept {
     using simd::fbatch;
@@ -91,14 +91,14 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
         }
         const fbatch ux = dx * inv_len, uy = dy * inv_len, uz = dz * inv_len;
         const fbatch sforce = simd::select(stretched, k * (l0 - l), zero);
-        sgx = simd::fnma(sforce, ux, sgx);
-        sgy = simd::fnma(sforce, uy, sgy);
-        sgz = simd::fnma(sforce, uz, sgz);
+        sgx = accumulate_neg<Exact>(sforce, ux, sgx);
+        sgy = accumulate_neg<Exact>(sforce, uy, sgy);
+        sgz = accumulate_neg<Exact>(sforce, uz, sgz);
         const fbatch c = k * xsimd::max(zero, simd::fnma(l, inv_len, one));
         // A zero-length spring at its rest: Hessian k I.
         const fbatch cm = simd::select(stretched, c, simd::select(l == zero, k, zero));
         const fbatch cu = simd::select(stretched, k - c, zero);
-        add_isotropic_outer(cm, cu, ux, uy, uz, hxx, hyy, hzz, hxy, hxz, hyz);
+        add_isotropic_outer<Exact>(cm, cu, ux, uy, uz, hxx, hyy, hzz, hxy, hxz, hyz);
         fbatch x0j, y0j, z0j;
         src.spring_pos(s, a.x0, a.y0, a.z0, x0j, y0j, z0j);
         const fbatch nx = x0j - x0i, ny = y0j - y0i, nz = z0j - z0i;
@@ -107,12 +107,12 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
             q = src.damping_q(s);
         } else {
             q = damping_q(src.spring_kd(s), inv_h, nx, ny, nz);
-            dh.add(q, nx, ny, nz);
+            dh.template add<Exact>(q, nx, ny, nz);
         }
         const fbatch p = q * simd::fma(dz - nz, nz, simd::fma(dy - ny, ny, (dx - nx) * nx));
-        gx = simd::fnma(p, nx, gx);
-        gy = simd::fnma(p, ny, gy);
-        gz = simd::fnma(p, nz, gz);
+        gx = accumulate_neg<Exact>(p, nx, gx);
+        gy = accumulate_neg<Exact>(p, ny, gy);
+        gz = accumulate_neg<Exact>(p, nz, gz);
     }
     fbatch qhxx = base + dh.xx, qhyy = base + dh.yy, qhzz = base + dh.zz, qhxy = dh.xy, qhxz = dh.xz, qhyz = dh.yz;
     if (!g.bend_diag.empty()) {
@@ -124,9 +124,9 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
             fbatch xj, yj, zj, x0j, y0j, z0j;
             src.bend_pos(s, a.x, a.y, a.z, xj, yj, zj);
             src.bend_pos(s, a.x0, a.y0, a.z0, x0j, y0j, z0j);
-            bx = simd::fma(q, simd::fma(bh, (xj - x0j) - dxi, xj - xi), bx);
-            by = simd::fma(q, simd::fma(bh, (yj - y0j) - dyi, yj - yi), by);
-            bz = simd::fma(q, simd::fma(bh, (zj - z0j) - dzi, zj - zi), bz);
+            bx = accumulate<Exact>(q, simd::fma(bh, (xj - x0j) - dxi, xj - xi), bx);
+            by = accumulate<Exact>(q, simd::fma(bh, (yj - y0j) - dyi, yj - yi), by);
+            bz = accumulate<Exact>(q, simd::fma(bh, (zj - z0j) - dzi, zj - zi), bz);
         }
         gx = gx + bx;
         gy = gy + by;
@@ -142,10 +142,10 @@ inline void solve_lanes(const Src& src, const SweepArgs& a, simd::fbatch& out_x,
         const fbatch ux = simd::fnma(dn, nx, dxi), uy = simd::fnma(dn, ny, dyi), uz = simd::fnma(dn, nz, dzi);
         const fbatch s = xsimd::sqrt(simd::fma(uz, uz, simd::fma(uy, uy, ux * ux)));
         const fbatch wf = friction_weight(src.own(a.fr_k), s, fbatch(a.fr_eps));
-        gx = simd::fma(wf, ux, gx);
-        gy = simd::fma(wf, uy, gy);
-        gz = simd::fma(wf, uz, gz);
-        add_isotropic_outer(wf, -wf, nx, ny, nz, qhxx, qhyy, qhzz, qhxy, qhxz, qhyz);
+        gx = accumulate<Exact>(wf, ux, gx);
+        gy = accumulate<Exact>(wf, uy, gy);
+        gz = accumulate<Exact>(wf, uz, gz);
+        add_isotropic_outer<Exact>(wf, -wf, nx, ny, nz, qhxx, qhyy, qhzz, qhxy, qhxz, qhyz);
     }
     hxx = hxx + (qhxx - base);
     hyy = hyy + (qhyy - base);
@@ -273,10 +273,11 @@ struct SliceSource {
 /// The local step of the slice's lanes (all of them computed; the caller writes only the live, movable ones): new
 /// positions into out_x/y/z, |g|^2 into g2 (lanes of width floats).
 /// `hess` (optional): the lanes' local Hessians, hess[c * width + lane] for component c (xx yy zz xy xz yz).
+template <bool Exact = false>
 inline void solve_batch(const SweepArgs& a, const VbdSlices& sl, std::size_t slice, float* out_x, float* out_y,
                         float* out_z, float* g2, float* hess = nullptr) noexcept {
     simd::fbatch ox, oy, oz, og, h[6];
-    solve_lanes(SliceSource(sl, *a.graph, slice), a, ox, oy, oz, og, hess != nullptr ? h : nullptr);
+    solve_lanes<false, Exact>(SliceSource(sl, *a.graph, slice), a, ox, oy, oz, og, hess != nullptr ? h : nullptr);
     ox.store_unaligned(out_x);
     oy.store_unaligned(out_y);
     oz.store_unaligned(out_z);

@@ -140,7 +140,13 @@ struct VbdGraph {
     float bend_beta = 0.0f;
     // Colours: vertices of colour c are colour_vertex[colour_offsets[c] .. colour_offsets[c + 1]), ascending; no
     // spring and no bending element joins two vertices of one colour. Greedy in index order.
+    // Mirror-exact (a cloth with Cloth::mirror, docs/garments.md "Mirror-exact sums"): every row in mirror order
+    // (mirror_row_order), the sums rounded term by term (vbd::accumulate), and a particle coupled to its own twin
+    // across the mirror plane shares its colour: such pairs open their colour, the lower index first, and are
+    // solved together from the same positions (`paired`: per colour_vertex entry, 1 at the first of a pair).
+    bool mirror_exact = false;
     std::vector<std::uint32_t> colour_offsets, colour_vertex;
+    std::vector<std::uint8_t> paired;
 
     std::size_t colour_count() const noexcept { return colour_offsets.empty() ? 0 : colour_offsets.size() - 1; }
 };
