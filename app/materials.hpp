@@ -68,7 +68,9 @@ std::string single_level_implicit_warning(const Simulation& sim);
 /// unconverged_residual): the motion is then the sweeps' error, not the fabric's (a flag at 2 sweeps per 0.1 s step
 /// ended 720 % stretched and "healthy"). What to change is said in the words of the interface: `drape run`'s flags, or
 /// (`viewer`) the Physics panel's controls; `budget_limited`: the viewer's iteration budget ran fewer sweeps than its
-/// iterations allow. A tolerance above unconverged_residual is named first, the iterations only below their maximum.
+/// iterations allow. A tolerance above unconverged_residual is named first, the iterations only below their maximum;
+/// the strain limit only when it is off. No warning for a strain within 5 % of the scene's strain limit (the limit
+/// holds it: what the scene allows, not the sweeps' error).
 std::string unconverged_implicit_warning(const Simulation& sim, float max_structural_strain, bool viewer,
                                          bool budget_limited = false);
 /// Whether that warning applies (the implicit solver, the strain and the last step's residual past their bounds),

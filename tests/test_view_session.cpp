@@ -1061,6 +1061,28 @@ TEST(ViewSessionImplicit, UnconvergedWarningYieldsToTheErrorAndNamesWhatLimitedT
     EXPECT_EQ(s.message().level, MessageLevel::error) << "the warning replaced the error: " << s.message().text;
 }
 
+// The implicit T-shirt at the viewer's 10 sweeps rests with its jersey at the scene's 30 % strain limit, its sweeps
+// unconverged (residual ~0.23): the strain is what the limit holds, not the sweeps' error, so no warning (the overlay
+// used to say so and to "switch the strain limit on", which is on). Past the limit the warning comes, without that fix.
+TEST(ViewSessionImplicit, StrainHeldAtTheLimitIsNotCalledTheSweepsError) {
+    SceneSpec spec = load_scene("tshirt");
+    spec.physics.solver = Solver::implicit;
+    spec.physics.implicit.iterations = 10;
+    BuiltScene b = build_scene(spec);
+    Simulation sim(std::move(b.cloth), b.initial, b.params);
+    sim.step(static_cast<std::size_t>(2.0 / sim.params().dt));
+    const float limit = sim.params().strain_limit.ratio, strain = sim.health().max_structural_strain;
+    ASSERT_GT(limit, unconverged_strain - 1e-6f);
+    ASSERT_GT(sim.implicit_stats().relative_residual, unconverged_residual) << "the case would not test the rule";
+    ASSERT_GT(strain, unconverged_strain) << "the case would not test the rule";
+    ASSERT_LE(strain, 1.05f * limit);
+    EXPECT_FALSE(implicit_unconverged(sim, strain));
+    EXPECT_TRUE(unconverged_implicit_warning(sim, strain, true).empty());
+    const std::string past = unconverged_implicit_warning(sim, 1.2f * limit, true);
+    EXPECT_NE(past.find("far from converged"), std::string::npos) << past;
+    EXPECT_EQ(past.find("switch the strain limit on"), std::string::npos) << past;
+}
+
 // A cloth the explicit solver runs far slower than real time: the viewer says once per cloth that the implicit solver
 // takes frame-long steps. Not while paused, not with the implicit solver, not when fast enough, not over a fresh
 // warning.
