@@ -79,7 +79,9 @@ TEST(MirrorSymmetry, SpringsAreColouredWithTheirMirrorImages) {
             group_of[g.group(k)[s]] = int(k), slot_of[g.group(k)[s]] = int(g.group_offsets[k] + s);
     for (std::uint32_t e = 0; e < edges.size(); ++e) {
         EXPECT_EQ(group_of[e], group_of[edge_twin[e]]) << "spring " << e;
-        if (edge_twin[e] != e) EXPECT_EQ(std::abs(slot_of[e] - slot_of[edge_twin[e]]), 1) << "spring " << e;
+        if (edge_twin[e] != e) {
+            EXPECT_EQ(std::abs(slot_of[e] - slot_of[edge_twin[e]]), 1) << "spring " << e;
+        }
     }
     const ColourGroups plain = colour_edges(edges, 5);
     std::vector<int> plain_group(edges.size(), -1);

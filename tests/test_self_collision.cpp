@@ -854,7 +854,7 @@ TEST(SelfCollision, SewnParticlesArePushedAsOnePoint) {
     for (std::size_t i = 16; i < 20; ++i) // the sheet sits at y = -1 mm, the square started at +1 mm (positions are
                                           // stored relative to the middle of the panels' origins)
         EXPECT_GT(double(sim.y()[i]) - double(sim.y()[5]), 0.0035) << "particle " << i << ": the gap opened towards h";
-    for (const auto [sewn, partner] : {std::pair{17u, 20u}, std::pair{19u, 22u}}) {
+    for (const auto& [sewn, partner] : {std::pair{17u, 20u}, std::pair{19u, 22u}}) {
         EXPECT_GT(rise(sewn), 0.001) << "the sewn particle " << sewn << " was pushed";
         EXPECT_EQ(rise(partner), rise(sewn)) << "the point " << sewn << " + " << partner << " moved as one";
     }

@@ -31,16 +31,10 @@ void Simulation::cook_vertex_triangles() {
     // A mirror-exact cloth (mirror_symmetry.hpp): each particle's triangles in mirror order, so that a particle and its
     // twin sum their triangles' terms alike.
     if (cloth_.mirror.empty() || cloth_.mirror_triangle.empty()) return;
+    const std::vector<std::uint32_t> from =
+        mirror_row_sources(vertex_tri_offsets_, vertex_tris_, cloth_.mirror, cloth_.mirror_triangle);
     std::vector<std::uint32_t> ordered(vertex_tris_.size());
-    for (std::size_t i = 0; i < n; ++i) {
-        const auto row = [&](std::size_t p) {
-            return std::span<const std::uint32_t>(vertex_tris_.data() + vertex_tri_offsets_[p],
-                                                  vertex_tri_offsets_[p + 1] - vertex_tri_offsets_[p]);
-        };
-        const std::vector<std::uint32_t> order =
-            mirror_row_order(std::uint32_t(i), cloth_.mirror[i], row(i), row(cloth_.mirror[i]), cloth_.mirror_triangle);
-        for (std::size_t k = 0; k < order.size(); ++k) ordered[vertex_tri_offsets_[i] + k] = row(i)[order[k]];
-    }
+    for (std::size_t k = 0; k < from.size(); ++k) ordered[k] = vertex_tris_[from[k]];
     vertex_tris_ = std::move(ordered);
 }
 

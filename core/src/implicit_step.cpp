@@ -167,11 +167,12 @@ void Simulation::cook_implicit() {
     }
     for (std::uint32_t i = 0; i < cloth_.particle_count; ++i) root[i] = find(i);
     solver->piece_held.assign(cloth_.particle_count, 0);
-    // A mirror-exact cloth (Cloth::mirror) gives its own map, and its sweeps are mirror-exact too (VbdGraph::mirror_exact).
+    // A mirror-exact cloth (Cloth::mirror) brings its own map, and vbd::cook makes its sweeps mirror-exact
+    // (VbdGraph::mirror_exact); another mesh's twins are found from its positions.
     const std::vector<std::uint32_t> fine_twins =
-        !cloth_.mirror.empty() ? cloth_.mirror
-        : cloth_.grid          ? std::vector<std::uint32_t>{}
-                               : vbd::mirror_twins({now.x.data(), n}, {now.y.data(), n}, {now.z.data(), n});
+        !cloth_.mirror.empty() || cloth_.grid
+            ? std::vector<std::uint32_t>{}
+            : vbd::mirror_twins({now.x.data(), n}, {now.y.data(), n}, {now.z.data(), n});
     solver->fine.cook(cloth_, fine_twins);
     if (!edge_rest_.empty()) solver->fine.set_spring_rest(edge_rest_); // seams being sewn (sewing.cpp)
     // Coarse levels: a cloth that can rebuild its fabric at a coarser spacing (Cloth::coarsen: grids, outlines).

@@ -66,6 +66,19 @@ std::vector<std::uint32_t> mirror_row_order(std::uint32_t i, std::uint32_t t, st
     return order;
 }
 
+std::vector<std::uint32_t> mirror_row_sources(std::span<const std::uint32_t> offsets,
+                                              std::span<const std::uint32_t> entries,
+                                              std::span<const std::uint32_t> twin,
+                                              std::span<const std::uint32_t> entry_twin) {
+    std::vector<std::uint32_t> from(entries.size());
+    const auto row = [&](std::size_t p) { return entries.subspan(offsets[p], offsets[p + 1] - offsets[p]); };
+    for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
+        const std::vector<std::uint32_t> order = mirror_row_order(std::uint32_t(i), twin[i], row(i), row(twin[i]), entry_twin);
+        for (std::size_t k = 0; k < order.size(); ++k) from[offsets[i] + k] = offsets[i] + order[k];
+    }
+    return from;
+}
+
 std::vector<std::uint32_t> mirror_triangle_map(std::span<const std::uint32_t> triangles,
                                                std::span<const std::uint32_t> twin) {
     const std::size_t count = triangles.size() / 3;

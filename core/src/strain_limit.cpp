@@ -172,7 +172,7 @@ void Simulation::cook_strain_limit() {
         };
         for (std::uint32_t g = 0; g < limit_groups_.group_count(); ++g) {
             if (limit_serial_[g]) continue;
-            for (const auto [lo, hi] : {std::pair{limit_groups_.group_offsets[g], limit_shear_begin_[g]},
+            for (const auto& [lo, hi] : {std::pair{limit_groups_.group_offsets[g], limit_shear_begin_[g]},
                                         std::pair{limit_shear_begin_[g], limit_groups_.group_offsets[g + 1]}})
                 for (std::size_t k = lo; k + 1 < hi; ++k)
                     if (shares(k)) limit_pair_[k] = strain_limit::pair_first, limit_pair_[++k] = strain_limit::pair_second;
@@ -235,9 +235,9 @@ template <bool Parallel> bool Simulation::strain_limit_stage(StateBuffer& out, b
                          limit_rest_.data(),
                          frame_form ? limit_inner_.data() : nullptr,
                          1.0f + sl.ratio,
-                         1.0f + 1.05f * sl.ratio,
+                         1.0f + strain_limit_tolerance * sl.ratio,
                          frame_form ? std::max(0.0f, 1.0f - sl.ratio) : 0.0f,
-                         frame_form ? std::max(0.0f, 1.0f - 1.05f * sl.ratio) : 0.0f,
+                         frame_form ? std::max(0.0f, 1.0f - strain_limit_tolerance * sl.ratio) : 0.0f,
                          frame_form || params_.integrator == Integrator::symplectic_euler
                              ? 1.0f / (float(sl.every) * params_.dt)
                              : 1.0f / float(sl.every),

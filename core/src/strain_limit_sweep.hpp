@@ -31,14 +31,14 @@ struct Args {
     /// held).
     const std::uint8_t* __restrict inner;
     float stretch;   ///< 1 + ratio
-    float tolerated; ///< 1 + 1.05 ratio: a spring longer than this before its correction keeps the sweeps going
+    float tolerated; ///< 1 + strain_limit_tolerance ratio: a spring longer than this before its correction keeps the sweeps going
     /// Frame form: 1 - ratio, the shortest a structural spring may be (0 in the explicit form: no bound). Its
     /// one-sided corrections pull a particle next to a clip along each stretched spring towards the clip, which
     /// squeezed the springs between it and the clip's other particles by up to 22 % (N = 200) and 36 % (N = 316)
     /// at 0.6 - 1.4 s of the wool hang with the limit at 0.095 (docs/implicit.md, "Compression next to the
     /// clips").
     float squeeze;
-    float squeeze_tolerated; ///< 1 - 1.05 ratio: shorter keeps the sweeps going
+    float squeeze_tolerated; ///< 1 - strain_limit_tolerance ratio: shorter keeps the sweeps going
     /// Change of u, v, w per unit displacement: Euler (velocity) 1 / (K dt), Verlet (displacement per step) 1 / K;
     /// frame form (implicit, Euler's velocities) 1 / (K h), for the corrections that move both ends only.
     float vel_scale;

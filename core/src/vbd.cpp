@@ -132,32 +132,20 @@ VbdGraph cook(const Cloth& cloth, std::span<const std::uint32_t> twin) {
             g.spring_edge[e] = row[e - b].second;
         }
     }
-    // A mirror-exact cloth (Cloth::mirror, as its twin map): each row in mirror order, so that a particle and its twin
+    // A mirror-exact cloth (Cloth::mirror, then also the twin map): each row in mirror order, so that a particle and its twin
     // take their terms in the same order and a particle on the mirror plane takes each next to its mirror image's.
-    g.mirror_exact = !cloth.mirror.empty() && twin.size() == n && std::equal(twin.begin(), twin.end(), cloth.mirror.begin());
-    auto mirror_rows = [&](const std::vector<std::uint32_t>& offsets, std::vector<std::uint32_t>& neighbour,
-                           auto&& permute_entries) {
-        std::vector<std::uint32_t> order_all(neighbour.size());
-        for (std::size_t i = 0; i < n; ++i) {
-            auto row = [&](std::size_t p) {
-                return std::span<const std::uint32_t>(neighbour.data() + offsets[p], offsets[p + 1] - offsets[p]);
-            };
-            const std::vector<std::uint32_t> order =
-                mirror_row_order(std::uint32_t(i), twin[i], row(i), row(twin[i]), twin);
-            for (std::size_t k = 0; k < order.size(); ++k) order_all[offsets[i] + k] = offsets[i] + order[k];
+    g.mirror_exact = !cloth.mirror.empty();
+    if (g.mirror_exact) {
+        const std::vector<std::uint32_t> from =
+            mirror_row_sources(g.spring_offsets, g.spring_neighbour, cloth.mirror, cloth.mirror);
+        std::vector<std::uint32_t> nb(entries), ed(entries);
+        for (std::size_t e = 0; e < entries; ++e) {
+            nb[e] = g.spring_neighbour[from[e]];
+            ed[e] = g.spring_edge[from[e]];
         }
-        permute_entries(order_all);
-    };
-    if (g.mirror_exact)
-        mirror_rows(g.spring_offsets, g.spring_neighbour, [&](const std::vector<std::uint32_t>& from) {
-            std::vector<std::uint32_t> nb(from.size()), ed(from.size());
-            for (std::size_t e = 0; e < from.size(); ++e) {
-                nb[e] = g.spring_neighbour[from[e]];
-                ed[e] = g.spring_edge[from[e]];
-            }
-            g.spring_neighbour = std::move(nb);
-            g.spring_edge = std::move(ed);
-        });
+        g.spring_neighbour = std::move(nb);
+        g.spring_edge = std::move(ed);
+    }
     g.spring_k.resize(entries);
     g.spring_kd.resize(entries);
     g.spring_rest.resize(entries);
@@ -180,16 +168,16 @@ VbdGraph cook(const Cloth& cloth, std::span<const std::uint32_t> twin) {
                 for (std::uint32_t e = g.bend_offsets[i]; e < g.bend_offsets[i + 1]; ++e)
                     std::tie(g.bend_neighbour[e], value[e]) = row[e - g.bend_offsets[i]];
             }
-            mirror_rows(g.bend_offsets, g.bend_neighbour, [&](const std::vector<std::uint32_t>& from) {
-                std::vector<std::uint32_t> nb(from.size());
-                std::vector<double> v(from.size());
-                for (std::size_t e = 0; e < from.size(); ++e) {
-                    nb[e] = g.bend_neighbour[from[e]];
-                    v[e] = value[from[e]];
-                }
-                g.bend_neighbour = std::move(nb);
-                value = std::move(v);
-            });
+            const std::vector<std::uint32_t> from =
+                mirror_row_sources(g.bend_offsets, g.bend_neighbour, cloth.mirror, cloth.mirror);
+            std::vector<std::uint32_t> nb(from.size());
+            std::vector<double> v(from.size());
+            for (std::size_t e = 0; e < from.size(); ++e) {
+                nb[e] = g.bend_neighbour[from[e]];
+                v[e] = value[from[e]];
+            }
+            g.bend_neighbour = std::move(nb);
+            value = std::move(v);
         }
         g.bend_q.resize(value.size());
         g.bend_diag.assign(n, 0.0f);
@@ -235,7 +223,8 @@ VbdGraph cook(const Cloth& cloth, std::span<const std::uint32_t> twin) {
     // smallest colour free at either: the sweeps then visit mirror images in the same colour, so a symmetric cloth
     // stays symmetric to rounding (in index order the T-shirt's halves were swept in unrelated orders and settled
     // ~1 cm apart). A twin coupled to its particle (across the mirror plane) takes its own colour after it.
-    const bool paired = twin.size() == n;
+    const std::span<const std::uint32_t> twin_of = g.mirror_exact ? std::span<const std::uint32_t>(cloth.mirror) : twin;
+    const bool paired = twin_of.size() == n;
     std::vector<std::uint32_t> pair_of(g.mirror_exact ? n : 0, UINT32_MAX); // i < t coupled, same colour: t
     std::vector<std::uint32_t> stamp; // stamp[c] == tag: colour c is taken by a neighbour of the particle(s) tagged
     std::uint32_t colours = 0, tag = 0;
@@ -261,7 +250,7 @@ VbdGraph cook(const Cloth& cloth, std::span<const std::uint32_t> twin) {
     };
     for (std::uint32_t i = 0; i < n; ++i) {
         if (colour[i] != UINT32_MAX) continue; // a twin coloured with its particle
-        const std::uint32_t t = paired ? twin[i] : UINT32_MAX;
+        const std::uint32_t t = paired ? twin_of[i] : UINT32_MAX;
         ++tag;
         mark_neighbours(i);
         if (t == UINT32_MAX || t == i || colour[t] != UINT32_MAX) {

@@ -31,6 +31,14 @@ std::vector<std::uint32_t> mirror_row_order(std::uint32_t i, std::uint32_t t, st
                                             std::span<const std::uint32_t> partner_row,
                                             std::span<const std::uint32_t> entry_twin);
 
+/// mirror_row_order over a whole CSR table (`offsets`, n + 1 entries; `entries`, each row sorted; `twin`, the
+/// particles' mirror map): for each slot of `entries`, the slot whose entry goes there when every row is put in mirror
+/// order. Apply it to `entries` and to every column stored beside it.
+std::vector<std::uint32_t> mirror_row_sources(std::span<const std::uint32_t> offsets,
+                                              std::span<const std::uint32_t> entries,
+                                              std::span<const std::uint32_t> twin,
+                                              std::span<const std::uint32_t> entry_twin);
+
 /// For each triangle (3 corners each) of `triangles`, the index of its mirror image (the triangle whose corners are
 /// the twins of its corners). Throws InvalidInput naming a triangle that has none.
 std::vector<std::uint32_t> mirror_triangle_map(std::span<const std::uint32_t> triangles,
