@@ -170,6 +170,57 @@ TEST(Collider, EllipsoidClosestPointMatchesBruteForce) {
     EXPECT_NEAR(std::abs(x[1]), 0.1f, 1e-6f);
 }
 
+// The Newton iteration stops early (a step under 1e-6 min a^2: quadratic convergence leaves ~1e-12 of the root),
+// so it is checked against the root itself: 200 bisections in long double of the same equation, then the same
+// radial snap. Points from the centre to 1e-6 under the surface, on the three body shapes and a sphere.
+TEST(Collider, EllipsoidClosestPointMatchesTheExactRootToFloatRounding) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-1.0, 1.0), depth(-6.0, 0.0);
+    for (Vec3f axes : {Vec3f{0.22f, 0.045f, 0.045f}, Vec3f{0.16f, 0.30f, 0.10f}, Vec3f{0.19f, 0.06f, 0.08f},
+                       Vec3f{0.3f, 0.3f, 0.3f}}) {
+        const long double a[3] = {axes[0], axes[1], axes[2]};
+        const long double amin2 = std::min({a[0], a[1], a[2]}) * std::min({a[0], a[1], a[2]});
+        const float amax = std::max({axes[0], axes[1], axes[2]});
+        for (int k = 0; k < 2000; ++k) {
+            // A direction, then a radius fraction 1 - 10^depth of the way to the surface along it.
+            double d[3] = {u(rng), u(rng), u(rng)};
+            const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            if (len < 1e-3) continue;
+            const double frac = k % 4 == 0 ? 0.5 * (u(rng) + 1.0) : 1.0 - std::pow(10.0, depth(rng));
+            double g = 0.0;
+            for (int c = 0; c < 3; ++c)
+                g += (d[c] / len / a[c]) * (d[c] / len / a[c]);
+            const Vec3f q{float(frac * d[0] / len / std::sqrt(g)), float(frac * d[1] / len / std::sqrt(g)),
+                          float(frac * d[2] / len / std::sqrt(g))};
+            if ((q[0] / axes[0]) * (q[0] / axes[0]) + (q[1] / axes[1]) * (q[1] / axes[1]) +
+                    (q[2] / axes[2]) * (q[2] / axes[2]) >= 1.0f ||
+                std::min({std::abs(q[0]), std::abs(q[1]), std::abs(q[2])}) < 1e-6f)
+                continue;
+            long double lo = -amin2, hi = 0.0L;
+            for (int it = 0; it < 200; ++it) {
+                const long double s = 0.5L * (lo + hi);
+                long double S = 0.0L;
+                for (int c = 0; c < 3; ++c) {
+                    const long double r = a[c] * q[c] / (a[c] * a[c] + s);
+                    S += r * r;
+                }
+                (S > 1.0L ? lo : hi) = s;
+            }
+            const long double s = 0.5L * (lo + hi);
+            long double x[3], gx = 0.0L;
+            for (int c = 0; c < 3; ++c) {
+                x[c] = a[c] * a[c] * q[c] / (a[c] * a[c] + s);
+                gx += (x[c] / a[c]) * (x[c] / a[c]);
+            }
+            const Vec3f got = ellipsoid_closest_point(axes, q);
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(got[c], double(x[c] / std::sqrt(gx)), 4e-7 * amax)
+                    << "axes " << axes[0] << " " << axes[1] << " " << axes[2] << ", point " << q[0] << " " << q[1]
+                    << " " << q[2] << ", component " << c;
+        }
+    }
+}
+
 // segment_entry: spheres and ellipsoids by their quadratic, checked against a 60-halving bisection in double of the
 // same inside test, and the normal against the one projecting a point just inside gives.
 TEST(Collider, SegmentEntryIsTheFirstCrossing) {
