@@ -59,9 +59,10 @@ struct SolverFlags {
 /// the scene's) is explicit.
 void apply_solver_flags(SceneSpec& spec, const SolverFlags& flags);
 
-/// A warning for the implicit solver on a cloth it solves on one grid only (no multilevel guess: OBJ meshes, the
-/// T-shirt and mask garments, the springs model, non-square grids; 256 particles or more): such a cloth does not come to rest at
-/// ordinary sweep counts (docs/implicit.md). Empty when it does not apply. `drape run` and the viewer show it.
+/// A warning for the implicit solver on a cloth it solves on one grid only (no multilevel guess: OBJ meshes, mask
+/// garments, the springs model, non-square grids; 256 particles or more) that hangs from pins: such a cloth does not
+/// come to rest at ordinary sweep counts (docs/implicit.md). A cloth without pins (resting on colliders, as the
+/// T-shirt on its body) is not warned. Empty when it does not apply. `drape run` and the viewer show it.
 std::string single_level_implicit_warning(const Simulation& sim);
 /// A warning (or empty) after implicit steps that end with the cloth strained (stretched or compressed) past
 /// unconverged_strain while the last step's sweeps were far from converged (relative residual above
