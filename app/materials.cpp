@@ -239,8 +239,9 @@ std::string single_level_implicit_warning(const Simulation& sim) {
 }
 
 bool implicit_unconverged(const Simulation& sim, float max_structural_strain) noexcept {
-    // A strain the scene's strain limit holds (within strain_limit_tolerance of it) is what the scene allows, not the sweeps' error: the
-    // implicit T-shirt (limit 0.3) rests at 0.300 on its body, and the viewer told it to "switch the strain limit on".
+    // A strain the scene's strain limit holds (within strain_limit_tolerance of it) is what the scene allows,
+    // not the sweeps' error: the implicit T-shirt (limit 0.3) rests at 0.300 on its body, and the viewer told it to
+    // "switch the strain limit on".
     const float limit = sim.params().strain_limit.ratio;
     const bool held = limit > 0.0f && max_structural_strain <= strain_limit_tolerance * limit;
     return sim.params().solver == Solver::implicit && max_structural_strain > unconverged_strain && !held &&

@@ -73,7 +73,8 @@ std::vector<std::uint32_t> mirror_row_sources(std::span<const std::uint32_t> off
     std::vector<std::uint32_t> from(entries.size());
     const auto row = [&](std::size_t p) { return entries.subspan(offsets[p], offsets[p + 1] - offsets[p]); };
     for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
-        const std::vector<std::uint32_t> order = mirror_row_order(std::uint32_t(i), twin[i], row(i), row(twin[i]), entry_twin);
+        const std::vector<std::uint32_t> order =
+            mirror_row_order(std::uint32_t(i), twin[i], row(i), row(twin[i]), entry_twin);
         for (std::size_t k = 0; k < order.size(); ++k) from[offsets[i] + k] = offsets[i] + order[k];
     }
     return from;

@@ -31,7 +31,8 @@ struct Args {
     /// held).
     const std::uint8_t* __restrict inner;
     float stretch;   ///< 1 + ratio
-    float tolerated; ///< 1 + strain_limit_tolerance ratio: a spring longer than this before its correction keeps the sweeps going
+    /// 1 + strain_limit_tolerance ratio: a spring longer than this before its correction keeps the sweeps going
+    float tolerated;
     /// Frame form: 1 - ratio, the shortest a structural spring may be (0 in the explicit form: no bound). Its
     /// one-sided corrections pull a particle next to a clip along each stretched spring towards the clip, which
     /// squeezed the springs between it and the clip's other particles by up to 22 % (N = 200) and 36 % (N = 316)

@@ -132,8 +132,9 @@ VbdGraph cook(const Cloth& cloth, std::span<const std::uint32_t> twin) {
             g.spring_edge[e] = row[e - b].second;
         }
     }
-    // A mirror-exact cloth (Cloth::mirror, then also the twin map): each row in mirror order, so that a particle and its twin
-    // take their terms in the same order and a particle on the mirror plane takes each next to its mirror image's.
+    // A mirror-exact cloth (Cloth::mirror, then also the twin map): each row in mirror order, so that a particle
+    // and its twin take their terms in the same order and a particle on the mirror plane takes each next to its
+    // mirror image's.
     g.mirror_exact = !cloth.mirror.empty();
     if (g.mirror_exact) {
         const std::vector<std::uint32_t> from =

@@ -23,9 +23,9 @@ namespace drape::vbd {
 
 /// Cooks the springs, the bending rows and the vertex colouring of a cloth. `twin` (empty, or one entry per particle:
 /// its mirror image's index, itself on the mirror plane, UINT32_MAX for none) makes the greedy colouring of a mesh
-/// give a particle and its twin the same colour where they are not coupled (mirror_twins below). A mirror-exact cloth
-/// (Cloth::mirror not empty) uses its own map instead of `twin`, and the graph is mirror-exact (VbdGraph::mirror_exact: rows in mirror
-/// order, exact sums, coupled twins in one colour as declared pairs).
+/// give a particle and its twin the same colour where they are not coupled (mirror_twins below). A mirror-exact
+/// cloth (Cloth::mirror not empty) uses its own map instead of `twin`, and the graph is mirror-exact
+/// (VbdGraph::mirror_exact: rows in mirror order, exact sums, coupled twins in one colour as declared pairs).
 VbdGraph cook(const Cloth& cloth, std::span<const std::uint32_t> twin = {});
 /// Each particle's mirror image across the plane x = (min x + max x) / 2 of the positions, where the positions are
 /// mirror symmetric: for each particle the particle at its mirrored position (within 1e-5 m; itself on the plane).

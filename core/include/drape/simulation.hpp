@@ -55,7 +55,8 @@ struct WindField {
 /// there (strain_limit.cpp), and the viewer and `drape run` do not call a strain within it the sweeps' error.
 inline constexpr float strain_limit_tolerance = 1.05f;
 /// At least `passes` sweeps run; more, up to strain_limit_max_passes, while a sweep still finds a spring longer than
-/// (1 + strain_limit_tolerance ratio) l0, so a limit that can hold does (within the 10 % that `drape run` calls honoured).
+/// (1 + strain_limit_tolerance ratio) l0, so a limit that can hold does (within the 10 % that `drape run` calls
+/// honoured).
 inline constexpr std::uint32_t strain_limit_max_passes = 100;
 /// The implicit solver's form of the limit moves only the end of a spring farther from the fixed particles, for this
 /// many sweeps of a step; later sweeps (the step's limit not yet held) move both ends by inverse mass. Where the
@@ -64,8 +65,8 @@ inline constexpr std::uint32_t strain_limit_max_passes = 100;
 /// the limit at 0.095 through 100 sweeps; with the switch at 30 or 60 sweeps the whole run kept within 0.098 at
 /// N = 100, 0.099 at N = 200, 316 and 1000 (docs/implicit.md, "Compression next to the clips").
 inline constexpr std::uint32_t strain_limit_one_sided_passes = 50;
-/// An implicit step after whose strain limiting a spring is still longer than (1 + strain_limit_tolerance ratio) l0 (its sweeps left a
-/// stretch the limit's strain_limit_max_passes could not take out) is dropped and solved again from its start as this
+/// An implicit step after whose strain limiting a spring is still longer than (1 + strain_limit_tolerance ratio) l0
+/// (its sweeps left a stretch the limit's strain_limit_max_passes could not take out) is dropped and solved again from its start as this
 /// many sub-steps of dt / strain_retry_substeps; a sub-step that again ends over the limit is split the same way, down
 /// to strain_retry_depth levels (dt / 27 at the default: 1/810 s for a 1/30 s step), never below implicit_min_dt. The
 /// wool dropped on the sphere at N >= 92 (10 mm cells and finer) with frame-long steps stretched its cap's rim past the
