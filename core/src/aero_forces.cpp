@@ -31,11 +31,8 @@ void Simulation::cook_vertex_triangles() {
     // A mirror-exact cloth (mirror_symmetry.hpp): each particle's triangles in mirror order, so that a particle and its
     // twin sum their triangles' terms alike.
     if (cloth_.mirror.empty() || cloth_.mirror_triangle.empty()) return;
-    const std::vector<std::uint32_t> from =
-        mirror_row_sources(vertex_tri_offsets_, vertex_tris_, cloth_.mirror, cloth_.mirror_triangle);
-    std::vector<std::uint32_t> ordered(vertex_tris_.size());
-    for (std::size_t k = 0; k < from.size(); ++k) ordered[k] = vertex_tris_[from[k]];
-    vertex_tris_ = std::move(ordered);
+    vertex_tris_ = gather(vertex_tris_,
+                          mirror_row_sources(vertex_tri_offsets_, vertex_tris_, cloth_.mirror, cloth_.mirror_triangle));
 }
 
 void Simulation::cook_aero() {

@@ -8,6 +8,7 @@
 
 #include "drape/cloth.hpp"
 #include "drape/errors.hpp"
+#include "drape/mirror_symmetry.hpp"
 #include "drape/simd.hpp"
 #include "sell_layout.hpp"
 
@@ -150,17 +151,19 @@ void set_bending(Cloth& cloth, std::vector<BendElement> elements, float damping)
     constexpr std::size_t C = simd::width;
     const std::size_t slices = cloth.padded_count / C;
     const std::size_t total = sell_slices(b.offsets, n, cloth.padded_count, b.slice_begin, b.slice_slots);
+    // With a mirror map, each particle's slots are filled in mirror order (mirror_symmetry.hpp), else in CSR order.
+    const std::vector<std::uint32_t> from =
+        twin.empty() ? std::vector<std::uint32_t>{} : mirror_row_sources(b.offsets, b.neighbour, twin, twin);
     b.sell_neighbour.reset(total);
     b.sell_coefficient.reset(total);
     for (std::size_t s = 0; s < slices; ++s)
         for (std::size_t lane = 0; lane < C; ++lane) {
             const std::size_t i = s * C + lane;
             const std::uint32_t len = i < n ? b.offsets[i + 1] - b.offsets[i] : 0;
-            const std::vector<std::uint32_t> order = mirror_order(b.offsets, b.neighbour, i < n ? i : n, twin);
             for (std::uint32_t slot = 0; slot < b.slice_slots[s]; ++slot) {
                 const std::size_t at = b.slice_begin[s] + slot * C + lane;
                 if (slot < len) {
-                    const std::uint32_t k = b.offsets[i] + (order.empty() ? slot : order[slot]);
+                    const std::uint32_t k = from.empty() ? b.offsets[i] + slot : from[b.offsets[i] + slot];
                     b.sell_neighbour[at] = b.neighbour[k];
                     b.sell_coefficient[at] = static_cast<float>(-b.value[k]);
                 } else {

@@ -7,9 +7,6 @@
 #include <cstdint>
 #include <vector>
 
-#include <span>
-
-#include "drape/mirror_symmetry.hpp"
 #include "drape/simd.hpp"
 
 namespace drape {
@@ -32,18 +29,6 @@ inline std::size_t sell_slices(const std::vector<std::uint32_t>& offsets, std::s
         slice_begin[s + 1] = slice_begin[s] + static_cast<std::uint32_t>(longest * C);
     }
     return slice_begin[slices];
-}
-
-/// The order to fill particle i's SELL slots from its CSR row (sorted neighbours): empty (the CSR order) without a
-/// mirror map or for i >= n (padding), else mirror_row_order's.
-inline std::vector<std::uint32_t> mirror_order(const std::vector<std::uint32_t>& offsets,
-                                               const std::vector<std::uint32_t>& neighbour, std::size_t i,
-                                               std::span<const std::uint32_t> mirror) {
-    if (mirror.empty() || i + 1 >= offsets.size()) return {};
-    const auto row = [&](std::size_t p) {
-        return std::span<const std::uint32_t>(neighbour.data() + offsets[p], offsets[p + 1] - offsets[p]);
-    };
-    return mirror_row_order(static_cast<std::uint32_t>(i), mirror[i], row(i), row(mirror[i]), mirror);
 }
 
 } // namespace drape

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <limits>
 
+#include "drape/mirror_symmetry.hpp"
 #include "drape/simd.hpp"
 #include "sell_layout.hpp"
 
@@ -58,6 +59,9 @@ SpringGraph build_spring_graph(std::size_t particle_count, std::size_t padded_co
     constexpr std::size_t C = simd::width;
     const std::size_t slices = padded_count / C;
     const std::size_t total = sell_slices(g.offsets, n, padded_count, g.slice_begin, g.slice_slots);
+    // With a mirror map, each particle's slots are filled in mirror order (mirror_symmetry.hpp), else in CSR order.
+    const std::vector<std::uint32_t> from =
+        mirror.empty() ? std::vector<std::uint32_t>{} : mirror_row_sources(g.offsets, g.neighbour, mirror, mirror);
     g.sell_neighbour.reset(total);
     g.sell_rest.reset(total);
     g.sell_stiffness.reset(total);
@@ -67,11 +71,10 @@ SpringGraph build_spring_graph(std::size_t particle_count, std::size_t padded_co
         for (std::size_t lane = 0; lane < C; ++lane) {
             const std::size_t i = s * C + lane;
             const std::uint32_t len = i < n ? g.offsets[i + 1] - g.offsets[i] : 0;
-            const std::vector<std::uint32_t> order = mirror_order(g.offsets, g.neighbour, i < n ? i : n, mirror);
             for (std::uint32_t slot = 0; slot < g.slice_slots[s]; ++slot) {
                 const std::size_t at = g.slice_begin[s] + slot * C + lane;
                 if (slot < len) {
-                    const std::uint32_t k = g.offsets[i] + (order.empty() ? slot : order[slot]);
+                    const std::uint32_t k = from.empty() ? g.offsets[i] + slot : from[g.offsets[i] + slot];
                     g.sell_neighbour[at] = g.neighbour[k];
                     g.sell_edge[at] = g.edge_index[k];
                     g.sell_rest[at] = edges[g.edge_index[k]].rest;

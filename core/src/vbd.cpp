@@ -139,13 +139,8 @@ VbdGraph cook(const Cloth& cloth, std::span<const std::uint32_t> twin) {
     if (g.mirror_exact) {
         const std::vector<std::uint32_t> from =
             mirror_row_sources(g.spring_offsets, g.spring_neighbour, cloth.mirror, cloth.mirror);
-        std::vector<std::uint32_t> nb(entries), ed(entries);
-        for (std::size_t e = 0; e < entries; ++e) {
-            nb[e] = g.spring_neighbour[from[e]];
-            ed[e] = g.spring_edge[from[e]];
-        }
-        g.spring_neighbour = std::move(nb);
-        g.spring_edge = std::move(ed);
+        g.spring_neighbour = gather(g.spring_neighbour, from);
+        g.spring_edge = gather(g.spring_edge, from);
     }
     g.spring_k.resize(entries);
     g.spring_kd.resize(entries);
@@ -171,14 +166,8 @@ VbdGraph cook(const Cloth& cloth, std::span<const std::uint32_t> twin) {
             }
             const std::vector<std::uint32_t> from =
                 mirror_row_sources(g.bend_offsets, g.bend_neighbour, cloth.mirror, cloth.mirror);
-            std::vector<std::uint32_t> nb(from.size());
-            std::vector<double> v(from.size());
-            for (std::size_t e = 0; e < from.size(); ++e) {
-                nb[e] = g.bend_neighbour[from[e]];
-                v[e] = value[from[e]];
-            }
-            g.bend_neighbour = std::move(nb);
-            value = std::move(v);
+            g.bend_neighbour = gather(g.bend_neighbour, from);
+            value = gather(value, from);
         }
         g.bend_q.resize(value.size());
         g.bend_diag.assign(n, 0.0f);

@@ -39,6 +39,14 @@ std::vector<std::uint32_t> mirror_row_sources(std::span<const std::uint32_t> off
                                               std::span<const std::uint32_t> twin,
                                               std::span<const std::uint32_t> entry_twin);
 
+/// `values` put in the order of a mirror_row_sources permutation: result[k] = values[from[k]]. For the columns stored
+/// beside a CSR table's entries.
+template <class T> std::vector<T> gather(const std::vector<T>& values, std::span<const std::uint32_t> from) {
+    std::vector<T> out(from.size());
+    for (std::size_t k = 0; k < from.size(); ++k) out[k] = values[from[k]];
+    return out;
+}
+
 /// For each triangle (3 corners each) of `triangles`, the index of its mirror image (the triangle whose corners are
 /// the twins of its corners). Throws InvalidInput naming a triangle that has none.
 std::vector<std::uint32_t> mirror_triangle_map(std::span<const std::uint32_t> triangles,
