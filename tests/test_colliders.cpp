@@ -170,19 +170,44 @@ TEST(Collider, EllipsoidClosestPointMatchesBruteForce) {
     EXPECT_NEAR(std::abs(x[1]), 0.1f, 1e-6f);
 }
 
-// The Newton iteration stops early (a step under 1e-6 min a^2: quadratic convergence leaves ~1e-12 of the root),
-// so it is checked against the root itself: 200 bisections in long double of the same equation, then the same
-// radial snap. Points from the centre to 1e-6 under the surface, on the three body shapes and a sphere.
-TEST(Collider, EllipsoidClosestPointMatchesTheExactRootToFloatRounding) {
+namespace {
+/// The root s of sum (a_i q_i / (a_i^2 + s))^2 = 1 by 200 bisections in long double, and the closest point it gives
+/// after the same radial snap as ellipsoid_closest_point.
+struct ExactEllipsoidRoot {
+    long double s;
+    Vec3f x;
+};
+ExactEllipsoidRoot exact_ellipsoid_root(Vec3f axes, Vec3f q) {
+    const long double a[3] = {axes[0], axes[1], axes[2]};
+    const long double amin = std::min({a[0], a[1], a[2]});
+    long double lo = -amin * amin, hi = 0.0L;
+    for (int it = 0; it < 200; ++it) {
+        const long double s = 0.5L * (lo + hi);
+        long double S = 0.0L;
+        for (int c = 0; c < 3; ++c) {
+            const long double r = a[c] * q[c] / (a[c] * a[c] + s);
+            S += r * r;
+        }
+        (S > 1.0L ? lo : hi) = s;
+    }
+    const long double s = 0.5L * (lo + hi);
+    long double x[3], gx = 0.0L;
+    for (int c = 0; c < 3; ++c) {
+        x[c] = a[c] * a[c] * q[c] / (a[c] * a[c] + s);
+        gx += (x[c] / a[c]) * (x[c] / a[c]);
+    }
+    return {s, {float(x[0] / std::sqrt(gx)), float(x[1] / std::sqrt(gx)), float(x[2] / std::sqrt(gx))}};
+}
+
+/// Calls f(axes, q) for points from the centre to 1e-6 under the surface (a direction, then a radius fraction
+/// 1 - 10^depth of the way to the surface along it; a quarter uniform), on the three body shapes and a sphere.
+template <class F> void for_points_inside_ellipsoids(F&& f) {
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> u(-1.0, 1.0), depth(-6.0, 0.0);
     for (Vec3f axes : {Vec3f{0.22f, 0.045f, 0.045f}, Vec3f{0.16f, 0.30f, 0.10f}, Vec3f{0.19f, 0.06f, 0.08f},
                        Vec3f{0.3f, 0.3f, 0.3f}}) {
-        const long double a[3] = {axes[0], axes[1], axes[2]};
-        const long double amin2 = std::min({a[0], a[1], a[2]}) * std::min({a[0], a[1], a[2]});
-        const float amax = std::max({axes[0], axes[1], axes[2]});
+        const double a[3] = {axes[0], axes[1], axes[2]};
         for (int k = 0; k < 2000; ++k) {
-            // A direction, then a radius fraction 1 - 10^depth of the way to the surface along it.
             double d[3] = {u(rng), u(rng), u(rng)};
             const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             if (len < 1e-3) continue;
@@ -196,29 +221,49 @@ TEST(Collider, EllipsoidClosestPointMatchesTheExactRootToFloatRounding) {
                     (q[2] / axes[2]) * (q[2] / axes[2]) >= 1.0f ||
                 std::min({std::abs(q[0]), std::abs(q[1]), std::abs(q[2])}) < 1e-6f)
                 continue;
-            long double lo = -amin2, hi = 0.0L;
-            for (int it = 0; it < 200; ++it) {
-                const long double s = 0.5L * (lo + hi);
-                long double S = 0.0L;
-                for (int c = 0; c < 3; ++c) {
-                    const long double r = a[c] * q[c] / (a[c] * a[c] + s);
-                    S += r * r;
-                }
-                (S > 1.0L ? lo : hi) = s;
-            }
-            const long double s = 0.5L * (lo + hi);
-            long double x[3], gx = 0.0L;
-            for (int c = 0; c < 3; ++c) {
-                x[c] = a[c] * a[c] * q[c] / (a[c] * a[c] + s);
-                gx += (x[c] / a[c]) * (x[c] / a[c]);
-            }
-            const Vec3f got = ellipsoid_closest_point(axes, q);
-            for (int c = 0; c < 3; ++c)
-                ASSERT_NEAR(got[c], double(x[c] / std::sqrt(gx)), 4e-7 * amax)
-                    << "axes " << axes[0] << " " << axes[1] << " " << axes[2] << ", point " << q[0] << " " << q[1]
-                    << " " << q[2] << ", component " << c;
+            f(axes, q);
         }
     }
+}
+} // namespace
+
+// The Newton iteration stops early (a step under 1e-6 min a^2: quadratic convergence leaves ~1e-12 of the root),
+// so it is checked against the root itself (exact_ellipsoid_root).
+TEST(Collider, EllipsoidClosestPointMatchesTheExactRootToFloatRounding) {
+    for_points_inside_ellipsoids([](Vec3f axes, Vec3f q) {
+        const Vec3f want = exact_ellipsoid_root(axes, q).x;
+        const Vec3f got = ellipsoid_closest_point(axes, q);
+        const float amax = std::max({axes[0], axes[1], axes[2]});
+        for (int c = 0; c < 3; ++c)
+            ASSERT_NEAR(got[c], want[c], 4e-7 * amax) << "axes " << axes[0] << " " << axes[1] << " " << axes[2]
+                                                      << ", point " << q[0] << " " << q[1] << " " << q[2]
+                                                      << ", component " << c;
+    });
+}
+
+// The warm start (the implicit solver's triangle terms pass each triangle's root from one corner's projection to
+// the next): from the root itself, from 1 % and 50 % off it, from anywhere in the bracket and from outside it (then
+// ignored), the same closest point as the exact root's, and the root handed back.
+TEST(Collider, EllipsoidClosestPointFromAnyWarmStartFindsTheSameRoot) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1.2, 0.2);
+    for_points_inside_ellipsoids([&](Vec3f axes, Vec3f q) {
+        const ExactEllipsoidRoot exact = exact_ellipsoid_root(axes, q);
+        const float amin = std::min({axes[0], axes[1], axes[2]});
+        const float amax = std::max({axes[0], axes[1], axes[2]});
+        const float amin2 = amin * amin;
+        const float root = float(exact.s);
+        for (float start : {root, 1.01f * root, 0.99f * root, 1.5f * root, 0.5f * root, float(u(rng)) * amin2,
+                            -2.0f * amin2, 0.1f * amin2, 0.0f}) {
+            float s = start;
+            const Vec3f got = ellipsoid_closest_point(axes, q, &s);
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(got[c], exact.x[c], 4e-7 * amax)
+                    << "axes " << axes[0] << " " << axes[1] << " " << axes[2] << ", point " << q[0] << " " << q[1]
+                    << " " << q[2] << ", component " << c << ", start " << start;
+            ASSERT_NEAR(s, root, 1e-5f * amin2) << "start " << start;
+        }
+    });
 }
 
 // segment_entry: spheres and ellipsoids by their quadratic, checked against a 60-halving bisection in double of the

@@ -161,12 +161,12 @@ inline Projection project_disc(const Collider& col, float x, float y, float z) n
     return {{col.centre[0] + ux * new_r, qy + ny * t, col.centre[2] + uz * new_r}, {nr * ux, ny, nr * uz}};
 }
 
-inline Projection project_ellipsoid(const Collider& col, float x, float y, float z) noexcept {
+inline Projection project_ellipsoid(const Collider& col, float x, float y, float z, float* s_warm) noexcept {
     Vec3f q;
     ellipsoid_level(col, x, y, z, &q);
     const auto& R = col.rotation;
     const Vec3f A{col.size[0] + col.thickness, col.size[1] + col.thickness, col.size[2] + col.thickness};
-    const Vec3f e = ellipsoid_closest_point(A, q);
+    const Vec3f e = ellipsoid_closest_point(A, q, s_warm);
     Vec3f n{e[0] / (A[0] * A[0]), e[1] / (A[1] * A[1]), e[2] / (A[2] * A[2])};
     const float len = std::sqrt(dot3(n, n));
     n = {n[0] / len, n[1] / len, n[2] / len};
@@ -178,7 +178,7 @@ inline Projection project_ellipsoid(const Collider& col, float x, float y, float
 }
 
 template <ColliderKind K>
-inline Projection project_kind(const Collider& col, float x, float y, float z) noexcept {
+inline Projection project_kind(const Collider& col, float x, float y, float z, float* s_warm = nullptr) noexcept {
     Projection pr;
     if constexpr (K == ColliderKind::plane) pr = project_plane(col, x, y, z);
     if constexpr (K == ColliderKind::sphere)
@@ -191,7 +191,7 @@ inline Projection project_kind(const Collider& col, float x, float y, float z) n
         pr = project_round(c, col.size[0] + col.thickness, x, y, z);
     }
     if constexpr (K == ColliderKind::disc) pr = project_disc(col, x, y, z);
-    if constexpr (K == ColliderKind::ellipsoid) pr = project_ellipsoid(col, x, y, z);
+    if constexpr (K == ColliderKind::ellipsoid) pr = project_ellipsoid(col, x, y, z, s_warm);
     // Float rounding can leave the projected point a hair inside; step out along the normal until the inside
     // test (the one the kernel uses) agrees, so a point is never found inside the same collider twice.
     float step = 1e-7f; // m
@@ -458,7 +458,7 @@ std::vector<Collider> default_body(ColliderSurface s) {
 // ---------------------------------------------------------------------------------------------------------------------
 // Projection
 
-Vec3f ellipsoid_closest_point(Vec3f semi_axes, Vec3f q_in) noexcept {
+Vec3f ellipsoid_closest_point(Vec3f semi_axes, Vec3f q_in, float* s_warm) noexcept {
     double a[3], a2[3], q[3];
     for (int k = 0; k < 3; ++k) {
         a[k] = semi_axes[k];
@@ -478,6 +478,9 @@ Vec3f ellipsoid_closest_point(Vec3f semi_axes, Vec3f q_in) noexcept {
     // with a 1e-8 stop 4 (3 to 5); the shirt's 3 s ran 0.91x the wall (docs/collisions.md, "Ellipsoid projection").
     const double amin2 = std::min({a2[0], a2[1], a2[2]});
     double lo = -amin2, hi = 0.0, s = 0.0;
+    // A warm start (a nearby point's root): Newton from either side of the root ends climbing to it (a step from
+    // the right lands left of it, by concavity), so any start in the bracket converges as from 0, in fewer steps.
+    if (s_warm && *s_warm > lo && *s_warm < hi) s = *s_warm;
     for (int it = 0; it < 100; ++it) {
         double S = 0.0, dS = 0.0;
         for (int k = 0; k < 3; ++k) {
@@ -500,6 +503,7 @@ Vec3f ellipsoid_closest_point(Vec3f semi_axes, Vec3f q_in) noexcept {
         s = next;
         if (done) break;
     }
+    if (s_warm) *s_warm = static_cast<float>(s);
     double x[3];
     for (int k = 0; k < 3; ++k) {
         x[k] = a2[k] * q[k] / (a2[k] + s);
@@ -525,11 +529,11 @@ Vec3f ellipsoid_closest_point(Vec3f semi_axes, Vec3f q_in) noexcept {
     return out;
 }
 
-Contact project_point(const Collider& col, Vec3f p) noexcept {
+Contact project_point(const Collider& col, Vec3f p, float* s_warm) noexcept {
     Contact out{false, p, {}};
     auto run = [&]<ColliderKind K>() {
         if (!inside_kind<K>(col, p[0], p[1], p[2])) return;
-        const Projection pr = project_kind<K>(col, p[0], p[1], p[2]);
+        const Projection pr = project_kind<K>(col, p[0], p[1], p[2], s_warm);
         out = {true, pr.point, pr.normal};
     };
     switch (col.kind) {

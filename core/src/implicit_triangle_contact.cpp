@@ -79,12 +79,30 @@ bool Simulation::implicit_triangle_terms(const float* x, const float* y, const f
             s += graph.spring_k[k];
         return s;
     };
+    // The projections' warm starts (vbd::TriangleTerms::warm): a triangle is projected by each of its corners in
+    // turn, one colour after another, so a colour touches it once (and one thread), provided its three corners have
+    // three colours, which the colouring gives every cloth whose triangle edges are springs; checked once.
+    if (!tt_warm_checked_) {
+        tt_warm_checked_ = true;
+        std::vector<std::uint32_t> colour(n, 0);
+        for (std::size_t c = 0; c < graph.colour_count(); ++c)
+            for (std::uint32_t k = graph.colour_offsets[c]; k < graph.colour_offsets[c + 1]; ++k)
+                colour[graph.colour_vertex[k]] = static_cast<std::uint32_t>(c);
+        bool distinct = true;
+        for (std::size_t t = 0; t < tris && distinct; ++t) {
+            const std::uint32_t c0 = colour[tri[3 * t]], c1 = colour[tri[3 * t + 1]], c2 = colour[tri[3 * t + 2]];
+            distinct = c0 != c1 && c1 != c2 && c0 != c2;
+        }
+        if (distinct) tt_warm_.assign(tris, 0.0f);
+    }
+    float* warm = tt_warm_.empty() ? nullptr : tt_warm_.data();
     constexpr std::size_t tri_block = 256;
     std::vector<std::uint8_t>& on = tt_on_;
     float* term = tt_term_.data();
     for_each_index<Parallel>((tris + tri_block - 1) / tri_block, [&](std::size_t blk) {
         for (std::size_t t = blk * tri_block, end = std::min(tris, (blk + 1) * tri_block); t < end; ++t) {
             on[t] = 0;
+            if (warm) warm[t] = 0.0f;
             const std::uint32_t v[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
             if (w[v[0]] == 0.0f && w[v[1]] == 0.0f && w[v[2]] == 0.0f) continue;
             TriangleContact best;

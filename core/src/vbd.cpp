@@ -376,7 +376,7 @@ bool triangle_terms_step(const TriangleTerms& terms, std::uint32_t i, const floa
             u[2] += e[j] * (pj[2] - z0[vj]);
         }
         // phi(q) and its normal: q farther than the reach from the inflated surface has no contact.
-        const Contact proj = project_point(col, {q[0], q[1], q[2]});
+        const Contact proj = project_point(col, {q[0], q[1], q[2]}, terms.warm ? terms.warm + t : nullptr);
         if (!proj.inside) continue;
         const float nx = proj.normal[0], ny = proj.normal[1], nz = proj.normal[2];
         const float a = terms.reach - ((proj.point[0] - q[0]) * nx + (proj.point[1] - q[1]) * ny +

@@ -51,6 +51,10 @@ struct TriangleTerms {
     /// one (the real inflated surface and the grown one are parallel: both are the solid grown by a ball).
     std::span<const Collider> grown;
     float reach = 0.0f; ///< m
+    /// Optional, per triangle: the ellipsoid projection's warm start (ellipsoid_closest_point), read and written by
+    /// each corner's step in turn; null: every projection starts cold. Only for sweeps in which no two corners of a
+    /// triangle are stepped at once.
+    float* warm = nullptr;
 };
 inline constexpr std::size_t triangle_term_floats = 5;
 

@@ -105,16 +105,20 @@ struct Contact {
     Vec3f normal{};      ///< outward unit normal of the inflated surface at `point` (valid when inside)
 };
 
-/// Projects one point out of one collider (the collider must be valid: check_collider).
-Contact project_point(const Collider& collider, Vec3f p) noexcept;
+/// Projects one point out of one collider (the collider must be valid: check_collider). `s_warm` (optional, read
+/// by ellipsoids only): ellipsoid_closest_point's warm start, for a caller that projects nearby points in turn.
+Contact project_point(const Collider& collider, Vec3f p, float* s_warm = nullptr) noexcept;
 
 /// Closest point of the ellipsoid with semi-axes `a` (> 0, local frame, centred at 0) to a point `q` inside
 /// it: x_i = a_i^2 q_i / (a_i^2 + s) where s in (-min a_i^2, 0] solves sum (a_i q_i / (a_i^2 + s))^2 = 1,
 /// found in double by Newton's method kept inside a shrinking bracket (a step leaving it is replaced by
 /// bisection, which keeps it robust near the medial axis, where the root approaches the pole). The result is
 /// then scaled radially onto the surface so that sum (x_i / a_i)^2 >= 1 holds in float. Points on a symmetry
-/// plane are nudged off it by 1e-9 a_i (the closest point there is not unique). Exposed for the tests.
-Vec3f ellipsoid_closest_point(Vec3f semi_axes, Vec3f q) noexcept;
+/// plane are nudged off it by 1e-9 a_i (the closest point there is not unique). `s_warm` (optional): Newton starts
+/// from *s_warm where it lies in (-min a_i^2, 0), else from 0, and *s_warm receives the root found, a start for a
+/// nearby point (the result is the same root to the stop's 1e-6 min a_i^2, far below float rounding of x).
+/// Exposed for the tests.
+Vec3f ellipsoid_closest_point(Vec3f semi_axes, Vec3f q, float* s_warm = nullptr) noexcept;
 
 /// The collide stage over particles [begin, end) of structure-of-arrays state: positions (m) and velocities
 /// (m/s) in place; particles with inv_mass 0 are skipped. One collider, or several in order (a body): with

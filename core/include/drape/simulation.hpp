@@ -450,6 +450,10 @@ class Simulation {
     std::vector<float> tt_term_;         ///< per triangle: vbd::triangle_term_floats floats
     std::vector<Collider> tt_colliders_; ///< the colliders grown by the terms' search reach
     float tt_reach_ = 0.0f;              ///< that reach, m
+    /// Per triangle: its last projection's ellipsoid parameter (ellipsoid_closest_point's warm start; 0 at each
+    /// step's start); empty when a colour holds two corners of one triangle (two threads would share it).
+    std::vector<float> tt_warm_;
+    bool tt_warm_checked_ = false;
     // Self-collision (self_collide.cpp; cooked when first enabled): the cloth's unique edges, its patches, per round
     // the boxes of every triangle and edge (in patch order), each patch's box and cone of normals and a spatial hash
     // of the patches (counting sort into buckets: sizes fixed at cooking, at most 8 cells per patch), and per particle
