@@ -697,8 +697,7 @@ template <bool Parallel> void Simulation::implicit_step() {
                  vertex_tris_.data(),     tt_vertex_on_.data(),
                  tt_on_.data(),           tt_term_.data(),
                  tt_colliders_,           tt_reach_};
-        // Warm starts shared through a triangle need its corners' steps in sequence: not in the Jacobi sweeps.
-        if (params_.implicit.method != ImplicitMethod::jacobi && !tt_warm_.empty()) terms.warm = tt_warm_.data();
+        if (!tt_warm_.empty()) terms.warm = tt_warm_.data(); // the Jacobi sweeps ignore it (Solver::run)
         st.triangle_terms = &terms;
     }
     implicit_stats_ = is.fine.run<Parallel>(st, params_.implicit, h, params_.air_drag);

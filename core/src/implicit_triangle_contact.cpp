@@ -81,7 +81,9 @@ bool Simulation::implicit_triangle_terms(const float* x, const float* y, const f
     };
     // The projections' warm starts (vbd::TriangleTerms::warm): a triangle is projected by each of its corners in
     // turn, one colour after another, so a colour touches it once (and one thread), provided its three corners have
-    // three colours, which the colouring gives every cloth whose triangle edges are springs; checked once.
+    // three colours. The greedy colouring gives that where a triangle's edges are springs, except on a mirror-exact
+    // cloth with a triangle joining a particle to its own twin (the pair shares a colour); checked once, and any
+    // triangle without three colours turns the warm starts off for the cloth.
     if (!tt_warm_checked_) {
         tt_warm_checked_ = true;
         std::vector<std::uint32_t> colour(n, 0);

@@ -625,6 +625,15 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     // A grid cloth's Gauss-Seidel sweeps run on its packed colour sub-grids (vbd_grid.hpp); the Chebyshev pass below
     // is element by element, so it runs on whichever arrays hold the iterate (count of them, mass their masses).
     const bool grid = !jacobi && grid_sweeps();
+    // The triangle terms' warm starts pass from one corner's step to the next: the Jacobi sweep steps all corners at
+    // once, so it projects every triangle cold.
+    TriangleTerms cold_terms;
+    const TriangleTerms* triangle_terms = st.triangle_terms;
+    if (jacobi && triangle_terms && triangle_terms->warm) {
+        cold_terms = *triangle_terms;
+        cold_terms.warm = nullptr;
+        triangle_terms = &cold_terms;
+    }
     // Contact, vertex by vertex right after its local step (its neighbours then never see it inside a collider):
     // out of every collider from the side the step came from. The contact's normal and its friction bound become the
     // vertex's friction in its next local steps (SweepArgs::fr_k, written at `slot`, the vertex's place in the
@@ -700,10 +709,10 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     auto keep_out = [&](std::size_t i, std::size_t slot, float p[3], const float* hess) {
         // The triangles' contact terms first: the step they give is then the free step below.
         float terms_hess[6];
-        if (st.triangle_terms && st.triangle_terms->vertex_on[i]) {
+        if (triangle_terms && triangle_terms->vertex_on[i]) {
             const float x_now[3] = {x[slot], y[slot], z[slot]};
             std::copy_n(hess, 6, terms_hess);
-            if (triangle_terms_step(*st.triangle_terms, static_cast<std::uint32_t>(i), x, y, z, cell_of,
+            if (triangle_terms_step(*triangle_terms, static_cast<std::uint32_t>(i), x, y, z, cell_of,
                                     st.x0, st.y0, st.z0, args.fr_eps, x_now, p, terms_hess, graph_.mirror_exact))
                 hess = terms_hess;
         }

@@ -52,8 +52,8 @@ struct TriangleTerms {
     std::span<const Collider> grown;
     float reach = 0.0f; ///< m
     /// Optional, per triangle: the ellipsoid projection's warm start (ellipsoid_closest_point), read and written by
-    /// each corner's step in turn; null: every projection starts cold. Only for sweeps in which no two corners of a
-    /// triangle are stepped at once.
+    /// each corner's step in turn; null: every projection starts cold. Only for colourings in which no colour holds
+    /// two corners of a triangle; Solver::run ignores it in the Jacobi sweeps (all vertices at once).
     float* warm = nullptr;
 };
 inline constexpr std::size_t triangle_term_floats = 5;

@@ -106,7 +106,8 @@ struct Contact {
 };
 
 /// Projects one point out of one collider (the collider must be valid: check_collider). `s_warm` (optional, read
-/// by ellipsoids only): ellipsoid_closest_point's warm start, for a caller that projects nearby points in turn.
+/// and written by ellipsoids only): ellipsoid_closest_point's warm start, for a caller that projects nearby points
+/// in turn.
 Contact project_point(const Collider& collider, Vec3f p, float* s_warm = nullptr) noexcept;
 
 /// Closest point of the ellipsoid with semi-axes `a` (> 0, local frame, centred at 0) to a point `q` inside
@@ -116,7 +117,8 @@ Contact project_point(const Collider& collider, Vec3f p, float* s_warm = nullptr
 /// then scaled radially onto the surface so that sum (x_i / a_i)^2 >= 1 holds in float. Points on a symmetry
 /// plane are nudged off it by 1e-9 a_i (the closest point there is not unique). `s_warm` (optional): Newton starts
 /// from *s_warm where it lies in (-min a_i^2, 0), else from 0, and *s_warm receives the root found, a start for a
-/// nearby point (the result is the same root to the stop's 1e-6 min a_i^2, far below float rounding of x).
+/// nearby point. Either start ends at a Newton step under 1e-6 min a_i^2, which quadratic convergence leaves ~1e-12
+/// min a_i^2 from the root, far below float rounding of x; the two results may still differ in the last bit.
 /// Exposed for the tests.
 Vec3f ellipsoid_closest_point(Vec3f semi_axes, Vec3f q, float* s_warm = nullptr) noexcept;
 
