@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 
 #include "drape/scene.hpp"
@@ -233,6 +234,58 @@ TEST(ImplicitContact, TheTriangleTermsStepIsTheMinimumOfTheModelWithThePenalty) 
         // A free step that already takes q out: no term.
         float p2[3] = {x_now[0], x_now[1] + 3.0f * d / b, x_now[2]}, hess2[6] = {m, m, m, 0.0f, 0.0f, 0.0f};
         EXPECT_FALSE(vbd::triangle_terms_step(terms, 0, x, y, z, nullptr, x, y, z, 1e-4f, x_now, p2, hess2));
+    }
+}
+
+// The kept tangent plane (vbd::TriangleTerms::plane): a corner's step whose contact point moved less than
+// triangle_plane_reuse times the ellipsoid's smallest radius of curvature since the triangle's last projection takes
+// that projection's tangent plane; farther, it projects again. On the body's arm (semi-axes 0.22, 0.045, 0.045 m,
+// smallest radius 9.2 mm) the reused plane's step must equal a fresh projection's to a micrometre.
+TEST(ImplicitContact, AKeptTangentPlaneGivesTheFreshProjectionsStepAndIsRenewedFartherAway) {
+    const float reach = 0.001f;
+    Collider arm = make_ellipsoid({0.0f, 0.0f, 0.0f}, {0.22f, 0.045f, 0.045f});
+    arm.thickness = 0.0f;
+    arm.size = {arm.size[0] + reach, arm.size[1] + reach, arm.size[2] + reach}; // an ellipsoid grown by about the reach
+    const std::uint32_t tri[3] = {0, 1, 2}, offsets[4] = {0, 1, 2, 3}, tris[3] = {0, 0, 0};
+    const std::uint8_t on_v[3] = {1, 1, 1}, on_t[1] = {1};
+    const float b = 1.0f / 3.0f, k = 400.0f, m = 100.0f;
+    const float term[vbd::triangle_term_floats] = {b, b, b, k, 0.3f};
+    const Collider grown[1] = {arm};
+    float kept[vbd::triangle_plane_floats];
+    kept[6] = std::numeric_limits<float>::quiet_NaN(); // none yet
+    vbd::TriangleTerms fresh{tri, offsets, tris, on_v, on_t, term, grown, reach};
+    vbd::TriangleTerms keeping = fresh;
+    keeping.plane = kept;
+    // A small triangle on the arm's slope, its centroid about 2 mm inside the grown surface (1 mm inside the
+    // inflated one), where the normal is no axis; x0 a little behind it (friction works).
+    const float cy = 0.02717f, cz = 0.02678f;
+    float x[3] = {0.100f, 0.112f, 0.104f}, y[3] = {cy, cy - 0.003f, cy + 0.002f};
+    float z[3] = {cz, cz + 0.004f, cz - 0.006f};
+    const float x0[3] = {x[0] - 0.001f, x[1] - 0.001f, x[2] - 0.001f};
+    auto step = [&](const vbd::TriangleTerms& terms, const float at[3], float p[3]) {
+        float hess[6] = {m, m, m, 0.0f, 0.0f, 0.0f};
+        for (int c = 0; c < 3; ++c) p[c] = at[c];
+        return vbd::triangle_terms_step(terms, 0, x, y, z, nullptr, x0, y, z, 1e-4f, at, p, hess);
+    };
+    const float start[3] = {x[0], y[0], z[0]};
+    float p_fresh[3], p_kept[3];
+    ASSERT_TRUE(step(keeping, start, p_kept)) << "q inside the arm: an active term";
+    const float q_ref[3] = {b * (x[0] + x[1] + x[2]), b * (y[0] + y[1] + y[2]), b * (z[0] + z[1] + z[2])};
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(kept[6 + c], q_ref[c], 1e-7f) << "the projection's contact point kept";
+    const float r_min = (0.045f + reach) * (0.045f + reach) / (0.22f + reach);
+    const float reuse = vbd::triangle_plane_reuse * r_min; // the contact point's move within which the plane is kept
+    for (const float move : {0.5f * reuse, 2.0f * reuse, 200.0f * reuse}) {
+        // Vertex 0 moves by move / b along a tangent-ish direction: q moves by `move`.
+        const float at[3] = {start[0] + 0.8f * move / b, start[1] - 0.36f * move / b, start[2] + 0.48f * move / b};
+        ASSERT_TRUE(step(fresh, at, p_fresh));
+        ASSERT_TRUE(step(keeping, at, p_kept));
+        double diff = 0.0;
+        for (int c = 0; c < 3; ++c) diff = std::max(diff, double(std::abs(p_kept[c] - p_fresh[c])));
+        const bool reused = std::abs(kept[6] - q_ref[0]) < 1e-9f;
+        std::printf("q moved %.3g m (reuse radius %.3g m): plane %s, kept step - fresh step %.3g m\n", double(move),
+                    double(reuse), reused ? "kept" : "projected again", diff);
+        EXPECT_EQ(reused, move < reuse) << "kept within the reuse radius only";
+        EXPECT_LT(diff, 1e-6) << "the kept plane's step is the fresh projection's";
     }
 }
 

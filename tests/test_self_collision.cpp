@@ -964,15 +964,17 @@ TEST(DISABLED_SelfCollisionCost, PerStep) {
                                 "without: max speed %.3g m/s\n", settle, hw.max_speed, hw.max_structural_strain,
                                 hw.finite ? "yes" : "no", without.health().max_speed);
                 }
-                const std::size_t runs0 = with.self_collision_runs();
+                const std::size_t runs0 = with.self_collision_runs(), sub0 = with.self_collision_substepped();
                 const double t_with = per_step(with, phase[ph == 0 ? 0 : 1]);
                 const std::size_t runs = with.self_collision_runs() - runs0;
+                const std::size_t sub = with.self_collision_substepped() - sub0;
                 const double t_without = per_step(without, phase[ph == 0 ? 0 : 1]);
                 std::printf("N = %u, %s, dt %.3g s, %s, %zu steps: step with self-collision %.1f us, without %.1f us "
-                            "(ratio %.2f); the stage ran in %zu of them; %zu contacts at its last run\n",
+                            "(ratio %.2f); the stage ran %zu times (%zu steps solved again in contact sub-steps), "
+                            "%zu parts and %zu contacts at its last run\n",
                             n, implicit ? "implicit" : "explicit", p.dt, ph == 0 ? "settling" : ph == 1 ? "resting" : "settled",
-                            phase[ph == 0 ? 0 : 1],
-                            t_with, t_without, t_with / t_without, runs, with.self_contacts());
+                            phase[ph == 0 ? 0 : 1], t_with, t_without, t_with / t_without, runs, sub,
+                            with.self_collision_parts(), with.self_contacts());
                 std::fflush(stdout);
             }
         }

@@ -697,7 +697,10 @@ template <bool Parallel> void Simulation::implicit_step() {
                  vertex_tris_.data(),     tt_vertex_on_.data(),
                  tt_on_.data(),           tt_term_.data(),
                  tt_colliders_,           tt_reach_};
-        if (!tt_warm_.empty()) terms.warm = tt_warm_.data(); // the Jacobi sweeps ignore it (Solver::run)
+        if (!tt_warm_.empty()) { // the Jacobi sweeps ignore them (Solver::run)
+            terms.warm = tt_warm_.data();
+            terms.plane = tt_plane_.data();
+        }
         st.triangle_terms = &terms;
     }
     implicit_stats_ = is.fine.run<Parallel>(st, params_.implicit, h, params_.air_drag);

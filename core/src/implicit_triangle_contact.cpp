@@ -17,6 +17,7 @@
 #include "drape/simulation.hpp"
 
 #include <algorithm>
+#include <limits>
 
 #include "drape/triangle_contact.hpp"
 #include "for_each_index.hpp"
@@ -95,9 +96,13 @@ bool Simulation::implicit_triangle_terms(const float* x, const float* y, const f
             const std::uint32_t c0 = colour[tri[3 * t]], c1 = colour[tri[3 * t + 1]], c2 = colour[tri[3 * t + 2]];
             distinct = c0 != c1 && c1 != c2 && c0 != c2;
         }
-        if (distinct) tt_warm_.assign(tris, 0.0f);
+        if (distinct) {
+            tt_warm_.assign(tris, 0.0f);
+            tt_plane_.assign(tris * vbd::triangle_plane_floats, 0.0f);
+        }
     }
     float* warm = tt_warm_.empty() ? nullptr : tt_warm_.data();
+    float* plane = tt_plane_.empty() ? nullptr : tt_plane_.data();
     constexpr std::size_t tri_block = 256;
     std::vector<std::uint8_t>& on = tt_on_;
     float* term = tt_term_.data();
@@ -105,6 +110,7 @@ bool Simulation::implicit_triangle_terms(const float* x, const float* y, const f
         for (std::size_t t = blk * tri_block, end = std::min(tris, (blk + 1) * tri_block); t < end; ++t) {
             on[t] = 0;
             if (warm) warm[t] = 0.0f;
+            if (plane) plane[vbd::triangle_plane_floats * t + 6] = std::numeric_limits<float>::quiet_NaN();
             const std::uint32_t v[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
             if (w[v[0]] == 0.0f && w[v[1]] == 0.0f && w[v[2]] == 0.0f) continue;
             TriangleContact best;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <tuple>
 
@@ -376,7 +377,26 @@ bool triangle_terms_step(const TriangleTerms& terms, std::uint32_t i, const floa
             u[2] += e[j] * (pj[2] - z0[vj]);
         }
         // phi(q) and its normal: q farther than the reach from the inflated surface has no contact.
-        const Contact proj = project_point(col, {q[0], q[1], q[2]}, terms.warm ? terms.warm + t : nullptr);
+        Contact proj;
+        float* kept = terms.plane && col.kind == ColliderKind::ellipsoid ? terms.plane + triangle_plane_floats * t
+                                                                          : nullptr;
+        const float r_min = kept ? std::min({col.size[0], col.size[1], col.size[2]}) : 0.0f;
+        const float reuse = triangle_plane_reuse * r_min * r_min / (kept ? std::max({col.size[0], col.size[1], col.size[2]}) : 1.0f);
+        const float mx = kept ? q[0] - kept[6] : 0.0f, my = kept ? q[1] - kept[7] : 0.0f, mz = kept ? q[2] - kept[8] : 0.0f;
+        if (kept && mx * mx + my * my + mz * mz < reuse * reuse) { // the tangent plane kept (NaN: never)
+            proj.point = {kept[0], kept[1], kept[2]};
+            proj.normal = {kept[3], kept[4], kept[5]};
+            proj.inside = (kept[0] - q[0]) * kept[3] + (kept[1] - q[1]) * kept[4] + (kept[2] - q[2]) * kept[5] > 0.0f;
+        } else {
+            proj = project_point(col, {q[0], q[1], q[2]}, terms.warm ? terms.warm + t : nullptr);
+            if (kept) {
+                for (int c = 0; c < 3; ++c) {
+                    kept[c] = proj.point[c];
+                    kept[3 + c] = proj.normal[c];
+                    kept[6 + c] = proj.inside ? q[c] : std::numeric_limits<float>::quiet_NaN();
+                }
+            }
+        }
         if (!proj.inside) continue;
         const float nx = proj.normal[0], ny = proj.normal[1], nz = proj.normal[2];
         const float a = terms.reach - ((proj.point[0] - q[0]) * nx + (proj.point[1] - q[1]) * ny +
@@ -625,13 +645,14 @@ ImplicitStats Solver::run(const LevelState& st, const ImplicitParams& ip, float 
     // A grid cloth's Gauss-Seidel sweeps run on its packed colour sub-grids (vbd_grid.hpp); the Chebyshev pass below
     // is element by element, so it runs on whichever arrays hold the iterate (count of them, mass their masses).
     const bool grid = !jacobi && grid_sweeps();
-    // The triangle terms' warm starts pass from one corner's step to the next: the Jacobi sweep steps all corners at
-    // once, so it projects every triangle cold.
+    // The triangle terms' warm starts and kept tangent planes pass from one corner's step to the next: the Jacobi
+    // sweep steps all corners at once, so it projects every triangle cold.
     TriangleTerms cold_terms;
     const TriangleTerms* triangle_terms = st.triangle_terms;
-    if (jacobi && triangle_terms && triangle_terms->warm) {
+    if (jacobi && triangle_terms && (triangle_terms->warm || triangle_terms->plane)) {
         cold_terms = *triangle_terms;
         cold_terms.warm = nullptr;
+        cold_terms.plane = nullptr;
         triangle_terms = &cold_terms;
     }
     // Contact, vertex by vertex right after its local step (its neighbours then never see it inside a collider):

@@ -55,8 +55,19 @@ struct TriangleTerms {
     /// each corner's step in turn; null: every projection starts cold. Only for colourings in which no colour holds
     /// two corners of a triangle; Solver::run ignores it in the Jacobi sweeps (all vertices at once).
     float* warm = nullptr;
+    /// Optional, per triangle (triangle_plane_floats floats): its last projection onto an ellipsoid that found the
+    /// contact point inside (surface point, outward unit normal, the contact point it was made from; that point's x
+    /// NaN: none). A corner's step whose contact point lies within triangle_plane_reuse times the ellipsoid's smallest
+    /// radius of curvature of that point takes the same tangent plane instead of projecting again (docs/collisions.md,
+    /// "Tangent planes kept between corners"). Same rules as `warm` (the Jacobi sweeps ignore it too).
+    float* plane = nullptr;
 };
 inline constexpr std::size_t triangle_term_floats = 5;
+inline constexpr std::size_t triangle_plane_floats = 9;
+/// The contact point's move (over the ellipsoid's smallest radius of curvature R) within which a kept tangent plane
+/// stands in for the surface: the normal then turns by at most this (radians) and the distance differs by at most
+/// half its square times R (5e-7 R: 5 nm on the T-shirt body's arms, R = 9 mm).
+inline constexpr float triangle_plane_reuse = 1e-3f;
 
 /// out = H^-1 r for a symmetric 3x3 H (xx yy zz xy xz yz) by its adjugate; false when the determinant is not
 /// a positive finite number (out then unchanged).

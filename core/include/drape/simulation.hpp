@@ -453,6 +453,8 @@ class Simulation {
     /// Per triangle: its last projection's ellipsoid parameter (ellipsoid_closest_point's warm start; 0 at each
     /// step's start); empty when a colour holds two corners of one triangle (two threads would share it).
     std::vector<float> tt_warm_;
+    /// Per triangle: its kept tangent plane (vbd::TriangleTerms::plane; none at each step's start); empty with tt_warm_.
+    std::vector<float> tt_plane_;
     bool tt_warm_checked_ = false;
     // Self-collision (self_collide.cpp; cooked when first enabled): the cloth's unique edges, its patches, per round
     // the boxes of every triangle and edge (in patch order), each patch's box and cone of normals and a spatial hash
