@@ -380,10 +380,14 @@ bool triangle_terms_step(const TriangleTerms& terms, std::uint32_t i, const floa
         Contact proj;
         float* kept = terms.plane && col.kind == ColliderKind::ellipsoid ? terms.plane + triangle_plane_floats * t
                                                                           : nullptr;
-        const float r_min = kept ? std::min({col.size[0], col.size[1], col.size[2]}) : 0.0f;
-        const float reuse = triangle_plane_reuse * r_min * r_min / (kept ? std::max({col.size[0], col.size[1], col.size[2]}) : 1.0f);
-        const float mx = kept ? q[0] - kept[6] : 0.0f, my = kept ? q[1] - kept[7] : 0.0f, mz = kept ? q[2] - kept[8] : 0.0f;
-        if (kept && mx * mx + my * my + mz * mz < reuse * reuse) { // the tangent plane kept (NaN: never)
+        bool reuse = false;
+        if (kept) { // within the reuse radius of the kept plane's contact point (NaN: none kept)
+            const float a_min = std::min({col.size[0], col.size[1], col.size[2]});
+            const float r = triangle_plane_reuse * a_min * a_min / std::max({col.size[0], col.size[1], col.size[2]});
+            const float mx = q[0] - kept[6], my = q[1] - kept[7], mz = q[2] - kept[8];
+            reuse = mx * mx + my * my + mz * mz < r * r;
+        }
+        if (reuse) {
             proj.point = {kept[0], kept[1], kept[2]};
             proj.normal = {kept[3], kept[4], kept[5]};
             proj.inside = (kept[0] - q[0]) * kept[3] + (kept[1] - q[1]) * kept[4] + (kept[2] - q[2]) * kept[5] > 0.0f;

@@ -57,16 +57,20 @@ struct TriangleTerms {
     float* warm = nullptr;
     /// Optional, per triangle (triangle_plane_floats floats): its last projection onto an ellipsoid that found the
     /// contact point inside (surface point, outward unit normal, the contact point it was made from; that point's x
-    /// NaN: none). A corner's step whose contact point lies within triangle_plane_reuse times the ellipsoid's smallest
-    /// radius of curvature of that point takes the same tangent plane instead of projecting again (docs/collisions.md,
-    /// "Tangent planes kept between corners"). Same rules as `warm` (the Jacobi sweeps ignore it too).
+    /// NaN: none). A corner's step whose contact point lies within triangle_plane_reuse R of that point takes the
+    /// same tangent plane instead of projecting again, R = min a^2 / max a of the ellipsoid's own semi-axes (its
+    /// smallest radius of curvature anywhere; the inflated surface's is larger by about the grown thickness)
+    /// (docs/collisions.md, "Tangent planes kept between corners"). Same rules as `warm` (the Jacobi sweeps ignore it
+    /// too).
     float* plane = nullptr;
 };
 inline constexpr std::size_t triangle_term_floats = 5;
 inline constexpr std::size_t triangle_plane_floats = 9;
-/// The contact point's move (over the ellipsoid's smallest radius of curvature R) within which a kept tangent plane
-/// stands in for the surface: the normal then turns by at most this (radians) and the distance differs by at most
-/// half its square times R (5e-7 R: 5 nm on the T-shirt body's arms, R = 9 mm).
+/// The contact point's move (over R, TriangleTerms::plane) within which a kept tangent plane stands in for the
+/// surface. For a contact point no deeper than the grown thickness below the inflated surface (whose radii of
+/// curvature exceed R by about that thickness) the surface point then moves by at most this times R, the normal turns
+/// by at most this (radians) and the depth differs by at most half its square times R (5e-7 R: 5 nm on the T-shirt
+/// body's arms, R = 9.2 mm, where the reuse radius is 9.2 um).
 inline constexpr float triangle_plane_reuse = 1e-3f;
 
 /// out = H^-1 r for a symmetric 3x3 H (xx yy zz xy xz yz) by its adjugate; false when the determinant is not
