@@ -197,6 +197,17 @@ TEST(ImplicitContact, TheDrapeAtRestStaysAtRest) {
     }
 }
 
+// One triangle (particles 0, 1, 2) with a contact term on collider 0 of `grown`: the arrays vbd::TriangleTerms
+// points into, for tests of triangle_terms_step.
+struct OneTriangleTerms {
+    const std::uint32_t tri[3] = {0, 1, 2}, offsets[4] = {0, 1, 2, 3}, tris[3] = {0, 0, 0};
+    const std::uint8_t on_v[3] = {1, 1, 1}, on_t[1] = {1};
+    float term[vbd::triangle_term_floats];
+    Collider grown[1];
+    OneTriangleTerms(const Collider& collider, float b, float k, float mu) : term{b, b, b, k, mu}, grown{collider} {}
+    vbd::TriangleTerms terms(float reach) const { return {tri, offsets, tris, on_v, on_t, term, grown, reach}; }
+};
+
 // Triangle contact terms (core/src/implicit_triangle_contact.cpp, vbd::triangle_terms_step): vertex 0 of a
 // triangle whose centroid q is inside a sphere by d. With the local model m I about x_now (free step = x_now)
 // and the term k / 2 phi(q)^2 (phi = -d, its gradient b_0 n in x_0), the minimum is x_now + k d b_0 / (m + k
@@ -205,12 +216,9 @@ TEST(ImplicitContact, TheTriangleTermsStepIsTheMinimumOfTheModelWithThePenalty) 
     const float reach = 0.05f;
     Collider sphere = make_sphere({0.0f, -1.0f, 0.0f}, 1.0f);
     sphere.thickness = reach; // no thickness of its own, grown by the reach (TriangleTerms::grown)
-    const std::uint32_t tri[3] = {0, 1, 2}, offsets[4] = {0, 1, 2, 3}, tris[3] = {0, 0, 0};
-    const std::uint8_t on_v[3] = {1, 1, 1}, on_t[1] = {1};
     const float b = 1.0f / 3.0f, k = 400.0f, m = 100.0f;
-    const float term[vbd::triangle_term_floats] = {b, b, b, k, 0.0f};
-    const Collider grown[1] = {sphere};
-    vbd::TriangleTerms terms{tri, offsets, tris, on_v, on_t, term, grown, reach};
+    const OneTriangleTerms one(sphere, b, k, 0.0f);
+    const vbd::TriangleTerms terms = one.terms(reach);
     for (const float d : {0.004f, -0.004f}) { // q inside by 4 mm, then 4 mm outside
         // A small triangle centred on the sphere's top, at height -d.
         float x[3] = {-0.01f, 0.01f, 0.0f}, y[3] = {-d, -d, -d}, z[3] = {-0.005f, -0.005f, 0.01f};
@@ -240,19 +248,16 @@ TEST(ImplicitContact, TheTriangleTermsStepIsTheMinimumOfTheModelWithThePenalty) 
 // The kept tangent plane (vbd::TriangleTerms::plane): a corner's step whose contact point moved less than
 // triangle_plane_reuse times the ellipsoid's smallest radius of curvature since the triangle's last projection takes
 // that projection's tangent plane; farther, it projects again. On the body's arm (semi-axes 0.22, 0.045, 0.045 m,
-// smallest radius 9.2 mm) the reused plane's step must equal a fresh projection's to a micrometre.
+// smallest radius 9.2 mm) the reused plane's step must equal a fresh projection's within 2.5e-7 m.
 TEST(ImplicitContact, AKeptTangentPlaneGivesTheFreshProjectionsStepAndIsRenewedFartherAway) {
     const float reach = 0.001f;
     Collider arm = make_ellipsoid({0.0f, 0.0f, 0.0f}, {0.22f, 0.045f, 0.045f});
     arm.thickness = reach; // no thickness of its own, grown by the reach (TriangleTerms::grown)
-    const std::uint32_t tri[3] = {0, 1, 2}, offsets[4] = {0, 1, 2, 3}, tris[3] = {0, 0, 0};
-    const std::uint8_t on_v[3] = {1, 1, 1}, on_t[1] = {1};
     const float b = 1.0f / 3.0f, k = 400.0f, m = 100.0f;
-    const float term[vbd::triangle_term_floats] = {b, b, b, k, 0.3f};
-    const Collider grown[1] = {arm};
+    const OneTriangleTerms one(arm, b, k, 0.3f);
     float kept[vbd::triangle_plane_floats];
     kept[6] = std::numeric_limits<float>::quiet_NaN(); // none yet
-    vbd::TriangleTerms fresh{tri, offsets, tris, on_v, on_t, term, grown, reach};
+    const vbd::TriangleTerms fresh = one.terms(reach);
     vbd::TriangleTerms keeping = fresh;
     keeping.plane = kept;
     // A small triangle on the arm's slope, its centroid about 3 mm inside the grown surface (2 mm inside the
