@@ -380,6 +380,9 @@ class Simulation {
     /// sequence number (one per group visited).
     std::vector<std::uint32_t> limit_particle_group_offsets_, limit_particle_groups_;
     std::vector<std::uint64_t> limit_group_moved_;
+    /// The implicit solver's form: the positions before the stage, whose moves decide the velocities a limit that
+    /// could not hold keeps (strain_limit_stage).
+    std::vector<float> limit_px_, limit_py_, limit_pz_;
     std::uint64_t limit_seq_ = 0;
     std::vector<std::uint32_t> limit_a_, limit_b_;
     /// The strain limit's form for frame-long steps (the implicit solver, a grab held or not; strain_limit.cpp) and the springs
